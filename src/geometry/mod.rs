@@ -1,0 +1,18 @@
+//! Geometric primitives and the exact, robust tests on them: rays, boxes,
+//! triangles, spheres, and the offsets that keep secondary rays off the surface
+//! they start from.
+
+pub mod aabb;
+pub mod hit;
+pub mod offset;
+pub mod primitives;
+pub mod ray;
+pub mod sphere;
+pub mod triangle;
+
+pub use aabb::Aabb;
+pub use hit::Hit;
+pub use primitives::{Primitives, Triangle};
+pub use ray::Ray;
+pub use sphere::Sphere;
+pub use triangle::TriangleTest;

@@ -1,0 +1,94 @@
+//! The flat list of primitives every tracer is built from.
+
+use glam::Vec3;
+
+use super::{Aabb, Ray, Sphere, TriangleTest, triangle};
+
+/// A triangle by its three vertices (winding defines the geometric normal).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Triangle {
+    /// Vertices 0, 1, 2.
+    pub v: [Vec3; 3],
+}
+
+impl Triangle {
+    /// Bounding box.
+    #[inline]
+    pub fn bounds(&self) -> Aabb {
+        Aabb::new(self.v[0].min(self.v[1]).min(self.v[2]), self.v[0].max(self.v[1]).max(self.v[2]))
+    }
+
+    /// Unnormalised geometric normal `(v1 - v0) x (v2 - v0)`.
+    #[inline]
+    pub fn normal(&self) -> Vec3 {
+        (self.v[1] - self.v[0]).cross(self.v[2] - self.v[0])
+    }
+
+    /// Twice the area.
+    pub fn double_area(&self) -> f32 {
+        self.normal().length()
+    }
+}
+
+/// All geometry of a scene as seen by a tracer: triangles get primitive ids
+/// `0..triangles.len()`, spheres the ids after them.
+#[derive(Clone, Debug, Default)]
+pub struct Primitives {
+    /// Triangles, in scene order.
+    pub triangles: Vec<Triangle>,
+    /// Analytic spheres.
+    pub spheres: Vec<Sphere>,
+}
+
+impl Primitives {
+    /// Number of primitives.
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.triangles.len() + self.spheres.len()
+    }
+
+    /// True when there is nothing to hit.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Bounding box of primitive `i`.
+    #[inline]
+    pub fn bounds(&self, i: usize) -> Aabb {
+        let nt = self.triangles.len();
+        if i < nt { self.triangles[i].bounds() } else { self.spheres[i - nt].bounds() }
+    }
+
+    /// Centroid of primitive `i`'s bounding box (what BVH builders split on).
+    #[inline]
+    pub fn centroid(&self, i: usize) -> Vec3 {
+        self.bounds(i).center()
+    }
+
+    /// Bounding box of everything.
+    pub fn world_bounds(&self) -> Aabb {
+        (0..self.len()).fold(Aabb::EMPTY, |b, i| b.union(self.bounds(i)))
+    }
+
+    /// Intersect primitive `i` with `ray`: `Some((t, u, v))` within the ray's interval.
+    /// `wr` holds the per-ray constants of the watertight test.
+    #[inline]
+    pub fn intersect_prim(
+        &self,
+        i: usize,
+        ray: &Ray,
+        wr: &triangle::WatertightRay,
+        test: TriangleTest,
+    ) -> Option<(f32, f32, f32)> {
+        let nt = self.triangles.len();
+        if i < nt {
+            let [a, b, c] = self.triangles[i].v;
+            match test {
+                TriangleTest::Watertight => triangle::intersect_watertight(ray, wr, a, b, c),
+                TriangleTest::MollerTrumbore => triangle::intersect_moller_trumbore(ray, a, b, c),
+            }
+        } else {
+            self.spheres[i - nt].intersect(ray)
+        }
+    }
+}

@@ -1,0 +1,35 @@
+//! Rays with an explicit parametric interval.
+
+use glam::Vec3;
+
+/// A ray `origin + t * dir`, valid for `t_min <= t <= t_max` (the same closed
+/// interval Embree uses for `tnear`/`tfar`). `dir` need not be normalised.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    /// Start point.
+    pub origin: Vec3,
+    /// Direction (any length, not zero).
+    pub dir: Vec3,
+    /// Smallest accepted hit distance, in units of `dir`.
+    pub t_min: f32,
+    /// Largest accepted hit distance, in units of `dir`.
+    pub t_max: f32,
+}
+
+impl Ray {
+    /// A ray over `[0, inf)`.
+    pub fn new(origin: Vec3, dir: Vec3) -> Self {
+        Self { origin, dir, t_min: 0.0, t_max: f32::INFINITY }
+    }
+
+    /// A ray over `[t_min, t_max]`.
+    pub fn with_range(origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Self {
+        Self { origin, dir, t_min, t_max }
+    }
+
+    /// The point at parameter `t`.
+    #[inline]
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.origin + t * self.dir
+    }
+}
