@@ -4,8 +4,15 @@
 //! brute-force loop, one of the BVH variants, or Embree.
 
 pub mod brute;
+pub mod config;
 
 pub use brute::BruteForce;
+pub use config::{AccelConfig, Backend, Builder, Traversal};
+
+use std::sync::Arc;
+
+use crate::error::{Error, Result};
+use crate::geometry::Primitives;
 
 use crate::geometry::{Hit, Ray};
 
@@ -19,4 +26,16 @@ pub trait Tracer: Send + Sync {
 
     /// True when any primitive is hit with `ray.t_min <= t <= ray.t_max`.
     fn occluded(&self, ray: &Ray) -> bool;
+}
+
+/// Build the tracer `cfg` asks for over `prims`.
+pub fn build_tracer(prims: Arc<Primitives>, cfg: &AccelConfig) -> Result<Box<dyn Tracer>> {
+    match cfg.backend {
+        Backend::Brute => Ok(Box::new(BruteForce::new(prims, cfg.triangle_test))),
+        // Replaced by the BVH when it lands (issue 3).
+        Backend::Native => Ok(Box::new(BruteForce::new(prims, cfg.triangle_test))),
+        Backend::Embree => Err(Error::Invalid(
+            "this build has no Embree backend: run scripts/setup-embree.sh and build with --features embree".into(),
+        )),
+    }
 }

@@ -1,0 +1,80 @@
+//! How a scene's acceleration structure is chosen: backend, BVH builder,
+//! traversal and triangle test. Selectable from the scene file and the CLI.
+
+use serde::{Deserialize, Serialize};
+
+use crate::geometry::TriangleTest;
+
+/// Where hits come from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Backend {
+    /// rtdiff's own BVH.
+    #[default]
+    Native,
+    /// Every primitive against every ray (the oracle; also the reports' "BVH off").
+    Brute,
+    /// Intel Embree 4 (needs the `embree` cargo feature and scripts/setup-embree.sh).
+    Embree,
+}
+
+/// BVH construction algorithm.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Builder {
+    /// The reports' split: axis cycles x, y, z with depth, median centroid.
+    Median,
+    /// The reports' "SAH + binning": 5 bins, cost N * box volume.
+    SahVolume,
+    /// Binned surface-area heuristic with traversal and intersection costs.
+    #[default]
+    Sah,
+}
+
+/// BVH traversal algorithm.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Traversal {
+    /// The reports' depth-first walk into every intersected child.
+    Basic,
+    /// Binary heap ordered by entry distance.
+    PriorityQueue,
+    /// The reports' vector kept sorted by entry distance.
+    SortedVector,
+    /// The reports' vector with nth-element selection of the nearest entry.
+    NthElement,
+    /// The production path: wide nodes, nearest-first, early termination.
+    #[default]
+    Fast,
+}
+
+/// Full acceleration-structure configuration.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct AccelConfig {
+    /// Hit provider.
+    pub backend: Backend,
+    /// BVH builder (native backend).
+    pub builder: Builder,
+    /// BVH traversal (native backend).
+    pub traversal: Traversal,
+    /// Ray/triangle test (native and brute backends).
+    pub triangle_test: TriangleTest,
+    /// Maximum primitives per leaf for the `median` builder (the reports used 1).
+    pub leaf_size: usize,
+    /// Bin count for the `sah` builder.
+    pub bins: usize,
+}
+
+impl Default for AccelConfig {
+    fn default() -> Self {
+        Self {
+            backend: Backend::Native,
+            builder: Builder::Sah,
+            traversal: Traversal::Fast,
+            triangle_test: TriangleTest::Watertight,
+            leaf_size: 1,
+            bins: 16,
+        }
+    }
+}
