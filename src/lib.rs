@@ -6,6 +6,7 @@
 //! differential harness beside it.
 
 pub mod accel;
+pub mod cli;
 pub mod error;
 pub mod geometry;
 pub mod mesh;

@@ -101,6 +101,16 @@ impl Mesh {
         self.file_normals = false;
     }
 
+    /// The mesh's triangles as tracer primitives (in face order).
+    pub fn to_primitives(&self) -> crate::geometry::Primitives {
+        let triangles = self
+            .indices
+            .iter()
+            .map(|t| crate::geometry::Triangle { v: t.map(|i| self.positions[i as usize]) })
+            .collect();
+        crate::geometry::Primitives { triangles, spheres: Vec::new() }
+    }
+
     /// Apply `f` to every position (normals are recomputed or transformed by the caller).
     pub fn map_positions(&mut self, f: impl Fn(Vec3) -> Vec3) {
         for p in &mut self.positions {

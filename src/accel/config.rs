@@ -48,6 +48,19 @@ pub enum Traversal {
     Fast,
 }
 
+/// Embree's build quality (`rtcSetSceneBuildQuality`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum EmbreeQuality {
+    /// RTC_BUILD_QUALITY_LOW.
+    Low,
+    /// RTC_BUILD_QUALITY_MEDIUM.
+    Medium,
+    /// RTC_BUILD_QUALITY_HIGH.
+    #[default]
+    High,
+}
+
 /// Full acceleration-structure configuration.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -64,6 +77,8 @@ pub struct AccelConfig {
     pub leaf_size: usize,
     /// Bin count for the `sah` builder.
     pub bins: usize,
+    /// Build quality of the Embree backend (always built with the robust flag).
+    pub embree_quality: EmbreeQuality,
 }
 
 impl Default for AccelConfig {
@@ -75,6 +90,7 @@ impl Default for AccelConfig {
             triangle_test: TriangleTest::Watertight,
             leaf_size: 1,
             bins: 16,
+            embree_quality: EmbreeQuality::High,
         }
     }
 }

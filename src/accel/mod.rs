@@ -7,7 +7,7 @@ pub mod brute;
 pub mod config;
 
 pub use brute::BruteForce;
-pub use config::{AccelConfig, Backend, Builder, Traversal};
+pub use config::{AccelConfig, Backend, Builder, EmbreeQuality, Traversal};
 
 use std::sync::Arc;
 

@@ -1,0 +1,2 @@
+//! Command-line subcommands: each parses nothing itself (clap does that in
+//! `main.rs`) and calls into the library.
