@@ -7,8 +7,11 @@
 
 pub mod accel;
 pub mod cli;
+#[cfg(feature = "embree")]
+pub mod embree;
 pub mod error;
 pub mod geometry;
+pub mod harness;
 pub mod mesh;
 
 pub use error::{Error, Result};

@@ -1,0 +1,2 @@
+//! The differential harness: deterministic ray sets and hit-parity reports
+//! comparing rtdiff's tracers with a reference (Embree or brute force).
