@@ -3,3 +3,23 @@
 
 pub mod parity;
 pub mod raysets;
+
+use std::path::Path;
+use std::sync::Arc;
+
+use crate::error::{Error, Result};
+
+/// The scene a harness command runs on: an `.obj` mesh normalised to the
+/// unit sphere (mean of the vertices at the origin, farthest vertex at
+/// distance 1) with the default camera and point light.
+pub fn load_context(path: &Path) -> Result<raysets::RayContext> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
+    match ext.as_deref() {
+        Some("obj") => {
+            let mut mesh = crate::mesh::load_obj(path)?;
+            parity::normalise_to_unit_sphere(&mut mesh.positions);
+            Ok(raysets::RayContext::with_defaults(Arc::new(mesh.to_primitives())))
+        }
+        _ => Err(Error::file(path, "unsupported scene file: expected a Wavefront .obj mesh")),
+    }
+}

@@ -246,6 +246,8 @@ pub struct StressRow {
 /// Everything a parity run found.
 #[derive(Clone, Debug, Serialize)]
 pub struct ParityReport {
+    /// Rays requested per set (with the seed, what replays a set).
+    pub count: usize,
     /// Per-set comparisons.
     pub sets: Vec<SetReport>,
     /// The stress report, when asked for.
@@ -548,6 +550,7 @@ pub fn run(ctx: &RayContext, opts: &ParityOptions) -> crate::Result<ParityReport
         }
     }
     Ok(ParityReport {
+        count: opts.count,
         sets: sets_out,
         stress,
         stress_tracers: ["watertight".into(), "moller-trumbore".into(), ref_label],
@@ -574,7 +577,7 @@ pub fn format_report(r: &ParityReport) -> String {
         );
         let _ = writeln!(
             o,
-            "  {:<28} {:>8} {:>8} {:>6} {:>6} {:>10} {:>10} {:>8} {:>6} {:>6} {:>10} {:>7}  classes",
+            "  {:<32} {:>8} {:>8} {:>6} {:>6} {:>10} {:>10} {:>8} {:>6} {:>6} {:>10} {:>7}  classes",
             "tracer",
             "miss/hit",
             "hit/miss",
@@ -597,7 +600,7 @@ pub fn format_report(r: &ParityReport) -> String {
                 .collect();
             let _ = writeln!(
                 o,
-                "  {:<28} {:>8} {:>8} {:>6} {:>6} {:>10.2e} {:>10.2e} {:>8.3} {:>6} {:>6} {:>10.2e} {:>7.3}  {}",
+                "  {:<32} {:>8} {:>8} {:>6} {:>6} {:>10.2e} {:>10.2e} {:>8.3} {:>6} {:>6} {:>10.2e} {:>7.3}  {}",
                 v.tracer,
                 v.native_miss_ref_hit,
                 v.native_hit_ref_miss,
@@ -612,11 +615,27 @@ pub fn format_report(r: &ParityReport) -> String {
                 v.bary_bound_ratio_max,
                 classes.join(" ")
             );
+        }
+        // Replayable examples, once per distinct set of disagreements.
+        let mut shown: Vec<Vec<usize>> = Vec::new();
+        for v in &s.variants {
+            let idx: Vec<usize> = v.examples.iter().map(|e| e.index).collect();
+            if idx.is_empty() || shown.contains(&idx) {
+                continue;
+            }
+            shown.push(idx);
+            let _ = writeln!(
+                o,
+                "  first disagreeing rays of {} (replay: --rays {} --seed {}, ray index):",
+                v.tracer,
+                s.kind.name(),
+                s.seed
+            );
             for e in &v.examples {
                 let _ = writeln!(
                     o,
-                    "      replay: set {} seed {} ray {}: {:?} -> {}; native {:?}, reference {:?}",
-                    e.set, e.seed, e.index, e.ray, e.what, e.native, e.reference
+                    "    {} #{}: {:?} -> {}; native {:?}, reference {:?}",
+                    e.set, e.index, e.ray, e.what, e.native, e.reference
                 );
             }
         }

@@ -247,8 +247,9 @@ pub enum RayTag {
     /// Nothing special.
     Plain,
     /// Crosses the surface at a shared edge or closed vertex at parameter
-    /// `t`: every triangle sharing it faces the ray the same way, so a
-    /// watertight tracer must hit something at `t` or before.
+    /// `t`: every triangle sharing it faces the ray the same way and the ray
+    /// meets one of them (checked in double precision), so a watertight
+    /// tracer must hit something at `t` or before.
     Crossing {
         /// Parameter of the aimed-at point.
         t: f32,
@@ -366,26 +367,49 @@ fn unit_normal(prims: &Primitives, tri: u32) -> DVec3 {
     (b - a).cross(c - a).normalize_or_zero()
 }
 
-/// Tag for a ray with unit direction `d` through a point shared by `tris`
-/// at parameter `t`: crossing when every triangle faces it the same way by a
-/// margin far above rounding (|cos| > 1e-3), tangent otherwise.
-fn crossing_tag(prims: &Primitives, tris: &[u32], d: Vec3, t: f32) -> RayTag {
-    let d = d.as_dvec3();
+/// Double-precision ray/triangle test (Moller-Trumbore, inclusive edges):
+/// the parameter where the exact f32 ray `(o, d)` meets triangle `tri`.
+/// Its rounding (about 1e-16 relative) is far below anything f32 resolves.
+fn hit_f64(prims: &Primitives, tri: u32, o: Vec3, d: Vec3) -> Option<f64> {
+    let [a, b, c] = prims.triangles[tri as usize].v.map(|p| p.as_dvec3());
+    let (o, d) = (o.as_dvec3(), d.as_dvec3());
+    let (e1, e2) = (b - a, c - a);
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    if det == 0.0 {
+        return None;
+    }
+    let tv = o - a;
+    let u = tv.dot(p) / det;
+    let q = tv.cross(e1);
+    let v = d.dot(q) / det;
+    let t = e2.dot(q) / det;
+    (u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t >= 0.0).then_some(t)
+}
+
+/// Tag for `ray` aimed at a point shared by `tris`: crossing when every
+/// triangle faces it the same way by a margin far above rounding
+/// (|cos| > 1e-3) and the ray, evaluated in double precision exactly as
+/// given, meets one of them (far from the origin, the rounded ray can pass
+/// beside the aimed-at point by more than a sliver triangle's width); tangent
+/// when the triangles face it opposite ways; plain otherwise.
+fn crossing_tag(prims: &Primitives, tris: &[u32], ray: &Ray) -> RayTag {
+    let d = ray.dir.as_dvec3();
     let cos: Vec<f64> = tris.iter().map(|&i| unit_normal(prims, i).dot(d)).collect();
     if cos.iter().all(|&c| c > 1e-3) || cos.iter().all(|&c| c < -1e-3) {
-        RayTag::Crossing { t }
+        let t = tris.iter().filter_map(|&i| hit_f64(prims, i, ray.origin, ray.dir)).fold(f64::INFINITY, f64::min);
+        if t.is_finite() { RayTag::Crossing { t: t as f32 } } else { RayTag::Plain }
     } else {
         RayTag::Tangent
     }
 }
 
 /// A ray from a random point at distance `0.5..2` scene radii towards `p`
-/// (unit direction), with the parameter of `p`.
-fn ray_towards(rng: &mut Rng, p: Vec3, radius: f32) -> (Ray, f32) {
+/// (unit direction).
+fn ray_towards(rng: &mut Rng, p: Vec3, radius: f32) -> Ray {
     let d = rng.unit_vector();
     let dist = radius * (0.5 + 1.5 * rng.f32());
-    let o = p - dist * d;
-    (Ray::new(o, d), dist)
+    Ray::new(p - dist * d, d)
 }
 
 /// The hit point of `hit` on `ray`, its error bound and geometric normal.
@@ -515,8 +539,8 @@ fn generate_one(ctx: &RayContext, kind: SetKind, name: String, seed: u64, count:
                         let (p, fan) = &topo.closed_vertices[rng.below(n_items)];
                         (*p, fan.clone())
                     };
-                    let (ray, t) = ray_towards(&mut rng, p, radius);
-                    tags.push(crossing_tag(prims, &tris, ray.dir, t));
+                    let ray = ray_towards(&mut rng, p, radius);
+                    tags.push(crossing_tag(prims, &tris, &ray));
                     rays.push(ray);
                 }
             }
