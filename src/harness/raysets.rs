@@ -258,14 +258,21 @@ pub enum RayTag {
     /// (the triangles sharing it face it opposite ways): touching it or not
     /// are both correct.
     Tangent,
+    /// Aimed at an edge or vertex of triangles thinner than rounding (see
+    /// `crossing_tag`): no answer can be required.
+    Degenerate,
     /// Spawned from a hit on primitive `prim` (hitting it again is a false
     /// self-intersection).
     Spawned {
         /// The primitive the ray starts on.
         prim: u32,
     },
-    /// A shadow ray: compared with `occluded` as well.
-    Shadow,
+    /// A shadow ray from a hit on primitive `prim`: compared with `occluded`
+    /// as well, and hitting `prim` again is a false self-intersection.
+    Shadow {
+        /// The primitive the ray starts on.
+        prim: u32,
+    },
 }
 
 /// A generated set of rays over one scene.
@@ -387,21 +394,37 @@ fn hit_f64(prims: &Primitives, tri: u32, o: Vec3, d: Vec3) -> Option<f64> {
     (u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t >= 0.0).then_some(t)
 }
 
-/// Tag for `ray` aimed at a point shared by `tris`: crossing when every
-/// triangle faces it the same way by a margin far above rounding
-/// (|cos| > 1e-3) and the ray, evaluated in double precision exactly as
-/// given, meets one of them (far from the origin, the rounded ray can pass
-/// beside the aimed-at point by more than a sliver triangle's width); tangent
-/// when the triangles face it opposite ways; plain otherwise.
-fn crossing_tag(prims: &Primitives, tris: &[u32], ray: &Ray) -> RayTag {
-    let d = ray.dir.as_dvec3();
+/// Tag for `ray` aimed at point `p` shared by `tris`.
+///
+/// Crossing when every triangle faces the ray the same way by a margin far
+/// above rounding (|cos| > 1e-2) and the ray, evaluated in double precision
+/// exactly as given, meets one of them. A watertight test decides exactly on
+/// a configuration whose vertices are moved by rounding (translation and
+/// shear, a few ulps of `mag = |o|_inf + |p|_inf`); the crossing is only
+/// guaranteed when that cannot fold a triangle over, i.e. when every
+/// triangle's smallest altitude, projected along the ray, exceeds
+/// `64 u mag` (about 8x the displacement, `u = 2^-24`). Thinner triangles
+/// (slivers, near-coincident vertices, as in the decimated dragon) make the
+/// ray `Degenerate`. Tangent when the triangles face the ray opposite ways.
+fn crossing_tag(prims: &Primitives, tris: &[u32], ray: &Ray, p: Vec3) -> RayTag {
+    let d = ray.dir.as_dvec3().normalize();
     let cos: Vec<f64> = tris.iter().map(|&i| unit_normal(prims, i).dot(d)).collect();
-    if cos.iter().all(|&c| c > 1e-3) || cos.iter().all(|&c| c < -1e-3) {
-        let t = tris.iter().filter_map(|&i| hit_f64(prims, i, ray.origin, ray.dir)).fold(f64::INFINITY, f64::min);
-        if t.is_finite() { RayTag::Crossing { t: t as f32 } } else { RayTag::Plain }
-    } else {
-        RayTag::Tangent
+    if !(cos.iter().all(|&c| c > 1e-2) || cos.iter().all(|&c| c < -1e-2)) {
+        return RayTag::Tangent;
     }
+    let mag = ray.origin.abs().max_element() as f64 + p.abs().max_element() as f64;
+    let margin = 64.0 * (f32::EPSILON as f64 * 0.5) * mag;
+    let thin = tris.iter().zip(&cos).any(|(&i, &c)| {
+        let [a, b, cc] = prims.triangles[i as usize].v.map(|v| v.as_dvec3());
+        let longest = (b - a).length().max((cc - b).length()).max((a - cc).length());
+        let altitude = (b - a).cross(cc - a).length() / longest;
+        altitude * c.abs() <= margin
+    });
+    if thin {
+        return RayTag::Degenerate;
+    }
+    let t = tris.iter().filter_map(|&i| hit_f64(prims, i, ray.origin, ray.dir)).fold(f64::INFINITY, f64::min);
+    if t.is_finite() { RayTag::Crossing { t: t as f32 } } else { RayTag::Plain }
 }
 
 /// A ray from a random point at distance `0.5..2` scene radii towards `p`
@@ -510,7 +533,7 @@ fn generate_one(ctx: &RayContext, kind: SetKind, name: String, seed: u64, count:
                     let o = offset_origin(p, err, n, lp - p);
                     // Up to the light point (which is not geometry): t in [0, 1].
                     rays.push(Ray::with_range(o, lp - o, 0.0, 1.0));
-                    tags.push(RayTag::Shadow);
+                    tags.push(RayTag::Shadow { prim: hit.prim });
                 } else {
                     // Half the rays leave on the side they arrived from
                     // (reflection), half go through (transmission).
@@ -533,14 +556,16 @@ fn generate_one(ctx: &RayContext, kind: SetKind, name: String, seed: u64, count:
                 for _ in 0..count {
                     let (p, tris): (Vec3, Vec<u32>) = if kind == SetKind::Edges {
                         let (a, b, t0, t1) = topo.shared_edges[rng.below(n_items)];
-                        let s = rng.f32();
+                        // Away from the ends: near a vertex other triangles of
+                        // its fan matter, and the vertices set covers those.
+                        let s = 0.05 + 0.9 * rng.f32();
                         (a + s * (b - a), vec![t0, t1])
                     } else {
                         let (p, fan) = &topo.closed_vertices[rng.below(n_items)];
                         (*p, fan.clone())
                     };
                     let ray = ray_towards(&mut rng, p, radius);
-                    tags.push(crossing_tag(prims, &tris, &ray));
+                    tags.push(crossing_tag(prims, &tris, &ray, p));
                     rays.push(ray);
                 }
             }
