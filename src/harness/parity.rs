@@ -342,6 +342,16 @@ fn is_self_hit(tag: RayTag, h: &Option<Hit>) -> bool {
     matches!((tag, h), (RayTag::Spawned { prim } | RayTag::Shadow { prim }, Some(h)) if h.prim == prim)
 }
 
+/// Leaks and false self-intersections among `hits` on `set`.
+fn count_failures(set: &RaySet, hits: &[Option<Hit>]) -> (u64, u64) {
+    let mut n = (0, 0);
+    for ((ray, &tag), h) in set.rays.iter().zip(&set.tags).zip(hits) {
+        n.0 += is_leak(ray, tag, h, &set.prims) as u64;
+        n.1 += is_self_hit(tag, h) as u64;
+    }
+    n
+}
+
 fn trace_all(tracer: &dyn Tracer, rays: &[Ray]) -> Vec<Option<Hit>> {
     rays.par_iter().with_min_len(256).map(|r| tracer.intersect(r)).collect()
 }
@@ -537,10 +547,9 @@ pub fn run(ctx: &RayContext, opts: &ParityOptions) -> crate::Result<ParityReport
                 reference_self_hits: 0,
                 variants: Vec::new(),
             };
-            for i in 0..set.rays.len() {
-                report.reference_leaks += is_leak(&set.rays[i], set.tags[i], &ref_hits[i], &set.prims) as u64;
-                report.reference_self_hits += is_self_hit(set.tags[i], &ref_hits[i]) as u64;
-            }
+            let (leaks, selfh) = count_failures(&set, &ref_hits);
+            report.reference_leaks = leaks;
+            report.reference_self_hits = selfh;
             for (cfg, tracer) in opts.variants.iter().zip(&tracers[1..]) {
                 let hits = trace_all(tracer.as_ref(), &set.rays);
                 let occ = occluded_all(tracer.as_ref(), &set);
@@ -559,11 +568,7 @@ pub fn run(ctx: &RayContext, opts: &ParityOptions) -> crate::Result<ParityReport
                 let mut selfh = [0u64; 3];
                 let stress_tracers = &tracers[1 + opts.variants.len()..];
                 for (k, t) in stress_tracers.iter().enumerate() {
-                    let hits = trace_all(t.as_ref(), &set.rays);
-                    for i in 0..set.rays.len() {
-                        leaks[k] += is_leak(&set.rays[i], set.tags[i], &hits[i], &set.prims) as u64;
-                        selfh[k] += is_self_hit(set.tags[i], &hits[i]) as u64;
-                    }
+                    (leaks[k], selfh[k]) = count_failures(&set, &trace_all(t.as_ref(), &set.rays));
                 }
                 leaks[2] = report.reference_leaks;
                 selfh[2] = report.reference_self_hits;
