@@ -153,6 +153,7 @@ unsafe extern "C" {
         byte_stride: usize,
         item_count: usize,
     ) -> *mut c_void;
+    pub fn rtcSetGeometryBuildQuality(geometry: RTCGeometry, quality: i32);
     pub fn rtcCommitGeometry(geometry: RTCGeometry);
 
     pub fn rtcIntersect1(scene: RTCScene, rayhit: *mut RTCRayHit, args: RTCIntersectArgumentsPtr);

@@ -18,6 +18,7 @@ pub const SPHERE_GEOM_ID: u32 = 1;
 pub struct Scene {
     raw: ffi::RTCScene,
     device: Device,
+    quality: i32,
 }
 
 // SAFETY: a committed scene is only read (rtcIntersect1 / rtcOccluded1 /
@@ -64,7 +65,7 @@ impl Scene {
             return Err(Error::Invalid("Embree: rtcNewScene returned NULL".into()));
         }
         // Keep our own reference to the device for error checks.
-        let scene = Self { raw, device: device.clone() };
+        let scene = Self { raw, device: device.clone(), quality: quality_code(quality) };
         // SAFETY: `raw` is a live, uncommitted scene; flag and quality are valid enum values.
         unsafe {
             ffi::rtcSetSceneFlags(raw, ffi::RTC_SCENE_FLAG_ROBUST);
@@ -105,8 +106,12 @@ impl Scene {
     }
 
     fn commit_and_attach(&self, g: GeomGuard, id: u32) -> Result<()> {
-        // SAFETY: live geometry and scene; `id` is unused in this scene.
+        // SAFETY: live geometry and scene; `id` is unused in this scene; the
+        // quality is a valid RTCBuildQuality.
         unsafe {
+            // Geometries default to MEDIUM; the scene's quality alone does not
+            // select the HIGH (spatial split) builder for their primitives.
+            ffi::rtcSetGeometryBuildQuality(g.0, self.quality);
             ffi::rtcCommitGeometry(g.0);
             ffi::rtcAttachGeometryByID(self.raw, g.0, id);
         }
