@@ -110,3 +110,29 @@ fn scene_bounds_match_the_primitives() {
     let w = prims.world_bounds();
     assert!(b.min.cmple(w.min).all() && b.max.cmpge(w.max).all(), "{b:?} vs {w:?}");
 }
+
+/// Why embree4-sys's 4.2 layout (80-byte `RTCRayHit`) is unsound with this
+/// library: on a hit, Embree 4.4 writes `instPrimID[0]` at byte 80.
+#[test]
+fn library_writes_inst_prim_id_at_byte_80() {
+    let t = EmbreeTracer::new(one_triangle_and_sphere(), EmbreeQuality::High).unwrap();
+    let mut rh = ffi::RTCRayHit::default();
+    rh.ray = ffi::RTCRay {
+        org_x: 0.25,
+        org_y: 0.25,
+        org_z: 1.0,
+        dir_z: -1.0,
+        tfar: f32::INFINITY,
+        mask: u32::MAX,
+        ..Default::default()
+    };
+    rh.hit.geomID = ffi::RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID = [0xDEAD_BEEF];
+    rh.hit.instPrimID = [0xDEAD_BEEF];
+    // SAFETY: committed scene, a 96-byte aligned RTCRayHit, default arguments.
+    unsafe { ffi::rtcIntersect1(t.scene().raw(), &mut rh, std::ptr::null_mut()) };
+    assert_eq!(rh.hit.geomID, 0);
+    assert_eq!(std::mem::offset_of!(ffi::RTCRayHit, hit.instPrimID), 80);
+    // Both were overwritten with RTC_INVALID_GEOMETRY_ID (no instance).
+    assert_eq!((rh.hit.instID[0], rh.hit.instPrimID[0]), (u32::MAX, u32::MAX));
+}
