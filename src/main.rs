@@ -11,11 +11,16 @@ struct Cli {
 }
 
 #[derive(Subcommand)]
-enum Command {}
+enum Command {
+    /// Render a scene file to a PNG or EXR image.
+    Render(rtdiff::cli::render::RenderArgs),
+}
 
 fn main() {
     let cli = Cli::parse();
-    let result: rtdiff::Result<()> = match cli.command {};
+    let result = match &cli.command {
+        Command::Render(a) => rtdiff::cli::render::run(a),
+    };
     if let Err(e) = result {
         eprintln!("rtdiff: error: {e}");
         std::process::exit(1);

@@ -1,2 +1,4 @@
-//! Command-line subcommands: each parses nothing itself (clap does that in
-//! `main.rs`) and calls into the library.
+//! Command-line subcommands: clap parses the arguments in `main.rs`; each
+//! module here turns them into library calls.
+
+pub mod render;
