@@ -176,7 +176,11 @@ impl<'a> Whitted<'a> {
         // 1 / shininess perpendicular to it and average N rays.
         let a = 1.0 / m.shininess.max(f32::MIN_POSITIVE);
         let (u, w) = r.any_orthonormal_pair();
-        let n = self.scene.params.glossy_samples;
+        // Split into N rays at the first glossy bounce only: deeper glossy
+        // bounces follow one perturbed ray each, so the ray count grows
+        // linearly with depth instead of as N^depth (two facing glossy
+        // mirrors at depth 5 would otherwise cost N^5 rays per pixel).
+        let n = if depth == 0 { self.scene.params.glossy_samples } else { 1 };
         let mut sum = Vec3::ZERO;
         for _ in 0..n {
             let du = (rng.next_f32() - 0.5) * a;
