@@ -20,7 +20,7 @@ pub fn luminance(c: Vec3) -> f32 {
 /// The 1D kernel of width `w` pixels.
 pub fn gaussian_kernel(w: f32) -> Vec<f32> {
     let mut n = w.ceil().max(1.0) as usize;
-    if n % 2 == 0 {
+    if n.is_multiple_of(2) {
         n += 1;
     }
     let r = w / 2.0;

@@ -166,7 +166,8 @@ impl Scene {
         if p.light_samples == 0 || p.glossy_samples == 0 || p.dof_samples == 0 {
             return Err(bad("params: light_samples, glossy_samples and dof_samples must be at least 1".into()));
         }
-        if !(p.bloom.kernel_size >= 1.0 && p.bloom.kernel_size.is_finite()) || !p.bloom.threshold.is_finite() {
+        let kernel_ok = p.bloom.kernel_size.is_finite() && p.bloom.kernel_size >= 1.0;
+        if !kernel_ok || !p.bloom.threshold.is_finite() {
             return Err(bad("params.bloom: kernel_size must be >= 1 and threshold finite".into()));
         }
         if let crate::geometry::offset::SpawnOffset::Fixed { epsilon } = p.ray_offset
@@ -183,7 +184,8 @@ impl Scene {
         {
             return Err(bad("camera: look_at must differ from position and not lie along up".into()));
         }
-        if !(cam.aperture >= 0.0) || cam.focus_distance.is_some_and(|d| !(d > 0.0)) {
+        let aperture_ok = cam.aperture.is_finite() && cam.aperture >= 0.0;
+        if !aperture_ok || cam.focus_distance.is_some_and(|d| d.is_nan() || d <= 0.0) {
             return Err(bad("camera: aperture must be >= 0 and focus_distance > 0".into()));
         }
         let mut camera = Camera::look_at(cam.position, cam.look_at, cam.up, cam.fov, img.width, img.height);
