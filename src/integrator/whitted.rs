@@ -142,25 +142,23 @@ impl<'a> Whitted<'a> {
     fn direct(&self, it: &Interaction, m: &Material, kd: Vec3, wo: Vec3, rng: &mut Rng, c: &mut Counters) -> Vec3 {
         let sp = SurfacePoint { p: it.p, n: it.ns, wo, kd, ks: m.ks, shininess: m.shininess };
         let shading = model(m.model);
-        let mut samples: Vec<LightSample> = Vec::new();
         let mut sum = Vec3::ZERO;
         for light in &self.scene.lights {
             let point = light.is_point();
             if !point && !self.plan.area_lights {
                 continue;
             }
-            samples.clear();
-            light.sample(self.scene.params.light_samples, self.scene.params.light_sampling, rng, &mut samples);
             let shadows = if point { self.plan.hard_shadows } else { self.plan.soft_shadows };
-            for s in &samples {
+            let (n, sampling) = (self.scene.params.light_samples, self.scene.params.light_sampling);
+            // Shade each sample as the light produces it (no list, no allocation).
+            light.sample(n, sampling, rng, &mut |s: LightSample| {
                 c.light_samples += 1;
-                let f = shading.direct(&sp, s);
-                if f == Vec3::ZERO {
-                    continue;
+                let f = shading.direct(&sp, &s);
+                if f != Vec3::ZERO {
+                    let vis = if shadows { self.visibility(it, s.position, c) } else { 1.0 };
+                    sum += vis * f;
                 }
-                let vis = if shadows { self.visibility(it, s.position, c) } else { 1.0 };
-                sum += vis * f;
-            }
+            });
         }
         sum
     }

@@ -43,8 +43,9 @@ pub trait Light: Send + Sync + std::fmt::Debug {
     /// True for a single point (no sampling needed).
     fn is_point(&self) -> bool;
 
-    /// Append `n` samples to `out` (a point light appends exactly one, whatever `n`).
-    fn sample(&self, n: u32, sampling: LightSampling, rng: &mut Rng, out: &mut Vec<LightSample>);
+    /// Call `f` with `n` samples (a point light gives exactly one, whatever `n`).
+    /// A callback rather than a returned list: no allocation per shading point.
+    fn sample(&self, n: u32, sampling: LightSampling, rng: &mut Rng, f: &mut dyn FnMut(LightSample));
 
     /// Position at parametric coordinates `(u, v)` in `[0, 1]^2` (ignored by point lights).
     fn position_at(&self, u: f32, v: f32) -> Vec3;

@@ -41,11 +41,11 @@ impl Light for ParallelogramLight {
     /// Jittered sampling uses a `k x k` grid with `k = ceil(sqrt(n))` (so
     /// `k^2 >= n` samples, as report 001 does); random sampling takes `n`
     /// independent points.
-    fn sample(&self, n: u32, sampling: LightSampling, rng: &mut Rng, out: &mut Vec<LightSample>) {
+    fn sample(&self, n: u32, sampling: LightSampling, rng: &mut Rng, f: &mut dyn FnMut(LightSample)) {
         let n = n.max(1);
         let normal = Some(self.normal());
         let mut push = |a: f32, b: f32, count: u32| {
-            out.push(LightSample {
+            f(LightSample {
                 position: self.position_at(a, b),
                 color: self.color_at(a, b),
                 average_weight: 1.0 / count as f32,
@@ -101,7 +101,7 @@ mod tests {
         assert_eq!(l.color_at(1.0, 1.0), Vec3::ONE);
         assert_eq!(l.color_at(0.5, 0.5), Vec3::new(0.5, 0.5, 0.5));
         let mut out = Vec::new();
-        l.sample(10, LightSampling::Jittered, &mut Rng::new(1, 1), &mut out);
+        l.sample(10, LightSampling::Jittered, &mut Rng::new(1, 1), &mut |s| out.push(s));
         assert_eq!(out.len(), 16);
         let total: f32 = out.iter().map(|s| s.measure).sum();
         assert!((total - 1.0).abs() < 1e-6);

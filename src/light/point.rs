@@ -19,14 +19,8 @@ impl Light for PointLight {
         true
     }
 
-    fn sample(&self, _n: u32, _sampling: LightSampling, _rng: &mut Rng, out: &mut Vec<LightSample>) {
-        out.push(LightSample {
-            position: self.position,
-            color: self.color,
-            average_weight: 1.0,
-            measure: 1.0,
-            normal: None,
-        });
+    fn sample(&self, _n: u32, _sampling: LightSampling, _rng: &mut Rng, f: &mut dyn FnMut(LightSample)) {
+        f(LightSample { position: self.position, color: self.color, average_weight: 1.0, measure: 1.0, normal: None });
     }
 
     fn position_at(&self, _u: f32, _v: f32) -> Vec3 {

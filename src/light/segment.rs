@@ -24,11 +24,11 @@ impl Light for SegmentLight {
         false
     }
 
-    fn sample(&self, n: u32, sampling: LightSampling, rng: &mut Rng, out: &mut Vec<LightSample>) {
+    fn sample(&self, n: u32, sampling: LightSampling, rng: &mut Rng, f: &mut dyn FnMut(LightSample)) {
         let n = n.max(1);
         let measure = (self.p1 - self.p0).length() / n as f32;
         samples_1d(n, sampling, rng, |u| {
-            out.push(LightSample {
+            f(LightSample {
                 position: self.position_at(u, 0.0),
                 color: self.color_at(u, 0.0),
                 average_weight: 1.0 / n as f32,
