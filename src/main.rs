@@ -14,12 +14,15 @@ struct Cli {
 enum Command {
     /// Render a scene file to a PNG or EXR image.
     Render(rtdiff::cli::render::RenderArgs),
+    /// Trace one pixel and print every ray it causes (headless visual debugging).
+    Debug(rtdiff::cli::debug::DebugArgs),
 }
 
 fn main() {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Render(a) => rtdiff::cli::render::run(a),
+        Command::Debug(a) => rtdiff::cli::debug::run(a),
     };
     if let Err(e) = result {
         eprintln!("rtdiff: error: {e}");

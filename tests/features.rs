@@ -510,3 +510,44 @@ fn image_is_identical_for_any_thread_count() {
     assert_eq!(a.counters, b.counters);
     assert!(a.counters.secondary_rays > 0 && a.counters.shadow_rays > 0);
 }
+
+#[test]
+fn debug_tree_records_blocked_shadow_rays_and_reflections() {
+    use rtdiff::integrator::debug::{RayKind, RayTree};
+    let d = temp_dir("debug-tree");
+    let q = obj_quad(&d, "q.obj", 2.0, 0.0);
+    let b =
+        [Vec3::new(0.7, 0.8, -1.0), Vec3::new(0.3, 0.8, -1.0), Vec3::new(0.3, 1.2, -1.0), Vec3::new(0.7, 1.2, -1.0)];
+    write(&d, "b.obj", &quad_obj(b));
+    let s = scene(
+        &d,
+        &one_pixel(
+            &format!(
+                r#""materials": {{ "m": {{ "kd": [0.5, 0.5, 0.5], "ks": [0.5, 0.5, 0.5] }} }},
+                   "meshes": [ {{ "file": "{q}", "material": "m" }}, {{ "file": "b.obj" }} ],
+                   "lights": [ {{ "type": "point", "position": [1, 2, -2], "color": [1, 1, 1] }} ]"#
+            ),
+            0.0,
+            0.0,
+        ),
+    );
+    let tracer = rtdiff::accel::build_tracer(s.prims.clone(), &s.accel).unwrap();
+    let integ = rtdiff::integrator::Whitted::new(&s, tracer.as_ref(), s.plan());
+    let mut tree = RayTree::default();
+    let mut c = rtdiff::integrator::Counters::default();
+    let mut rng = rtdiff::sampler::Rng::new(0, 0);
+    let color = integ.trace_as(RayKind::Camera, &s.camera.ray(0.5, 0.5), 0, &mut rng, &mut c, &mut tree);
+    let root = &tree.roots[0];
+    assert_eq!(root.color, <[f32; 3]>::from(color));
+    let hit = root.hit.as_ref().unwrap();
+    assert!(hit.prim < 2, "the camera ray hits the big quad");
+    // The only light sample is blocked by the small quad (primitives 2 and 3), about halfway.
+    assert_eq!(root.lights.len(), 1);
+    let (blocker, t) = root.lights[0].shadow_rays[0].blocked_by.unwrap();
+    assert!((2..4).contains(&blocker) && (t - 0.5).abs() < 0.01, "{blocker} {t}");
+    assert_eq!(root.lights[0].visibility, 0.0);
+    // The mirror part spawns one reflection ray, which leaves the scene.
+    assert_eq!(root.children.len(), 1);
+    assert_eq!(root.children[0].kind, RayKind::Reflection);
+    assert!(root.children[0].hit.is_none());
+}

@@ -1,4 +1,5 @@
 //! Command-line subcommands: clap parses the arguments in `main.rs`; each
 //! module here turns them into library calls.
 
+pub mod debug;
 pub mod render;

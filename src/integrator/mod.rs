@@ -1,6 +1,7 @@
 //! Integrators: the radiance arriving along a camera ray. Each variant in its
 //! own file behind [`Integrator`].
 
+pub mod debug;
 pub mod whitted;
 
 pub use whitted::Whitted;

@@ -3,6 +3,7 @@
 
 use glam::{Vec2, Vec3};
 
+use super::debug::{NoRecorder, RayKind, Recorder};
 use super::{Counters, Integrator};
 use crate::accel::Tracer;
 use crate::features::Plan;
@@ -115,19 +116,21 @@ impl<'a> Whitted<'a> {
 
     /// Fraction of light from `target` that reaches `it`: 0 or 1 for opaque
     /// blockers, attenuated by `1 - opacity` per transparent surface crossed.
-    pub fn visibility(&self, it: &Interaction, target: Vec3, c: &mut Counters) -> f32 {
+    pub fn visibility<R: Recorder>(&self, it: &Interaction, target: Vec3, c: &mut Counters, rec: &mut R) -> f32 {
         let origin = offset::spawn_origin(self.offset, it.p, it.p_err, it.ng, target - it.p);
         let mut ray = Ray::with_range(origin, target - origin, 0.0, SHADOW_T_MAX);
         c.shadow_rays += 1;
-        if !self.plan.transparency {
+        if !self.plan.transparency && !R::ACTIVE {
             return if self.tracer.occluded(&ray) { 0.0 } else { 1.0 };
         }
         let mut transmitted = 1.0;
         for _ in 0..MAX_SHADOW_CROSSINGS {
-            let Some(hit) = self.tracer.intersect(&ray) else { return transmitted };
+            let hit = self.tracer.intersect(&ray);
+            rec.shadow_ray(&ray, hit.as_ref());
+            let Some(hit) = hit else { return transmitted };
             let blocker = self.interaction(&ray, &hit);
             let m = &self.scene.materials[blocker.material as usize];
-            if !m.is_transparent() {
+            if !m.is_transparent() || !self.plan.transparency {
                 return 0.0;
             }
             transmitted *= 1.0 - m.opacity;
@@ -139,11 +142,21 @@ impl<'a> Whitted<'a> {
     }
 
     /// Light reflected at `it` towards `wo` from every light.
-    fn direct(&self, it: &Interaction, m: &Material, kd: Vec3, wo: Vec3, rng: &mut Rng, c: &mut Counters) -> Vec3 {
+    #[allow(clippy::too_many_arguments)]
+    fn direct<R: Recorder>(
+        &self,
+        it: &Interaction,
+        m: &Material,
+        kd: Vec3,
+        wo: Vec3,
+        rng: &mut Rng,
+        c: &mut Counters,
+        rec: &mut R,
+    ) -> Vec3 {
         let sp = SurfacePoint { p: it.p, n: it.ns, wo, kd, ks: m.ks, shininess: m.shininess };
         let shading = model(m.model);
         let mut sum = Vec3::ZERO;
-        for light in &self.scene.lights {
+        for (li, light) in self.scene.lights.iter().enumerate() {
             let point = light.is_point();
             if !point && !self.plan.area_lights {
                 continue;
@@ -155,8 +168,11 @@ impl<'a> Whitted<'a> {
                 c.light_samples += 1;
                 let f = shading.direct(&sp, &s);
                 if f != Vec3::ZERO {
-                    let vis = if shadows { self.visibility(it, s.position, c) } else { 1.0 };
+                    let vis = if shadows { self.visibility(it, s.position, c, rec) } else { 1.0 };
                     sum += vis * f;
+                    rec.light_sample(li, &s, f, vis);
+                } else {
+                    rec.light_sample(li, &s, f, 0.0);
                 }
             });
         }
@@ -164,11 +180,21 @@ impl<'a> Whitted<'a> {
     }
 
     /// Mirror or glossy reflection at `it` of the incoming direction `d`.
-    fn reflection(&self, it: &Interaction, m: &Material, d: Vec3, depth: u32, rng: &mut Rng, c: &mut Counters) -> Vec3 {
+    #[allow(clippy::too_many_arguments)]
+    fn reflection<R: Recorder>(
+        &self,
+        it: &Interaction,
+        m: &Material,
+        d: Vec3,
+        depth: u32,
+        rng: &mut Rng,
+        c: &mut Counters,
+        rec: &mut R,
+    ) -> Vec3 {
         let r = (d - 2.0 * d.dot(it.ns) * it.ns).normalize();
         if !self.plan.glossy {
             c.secondary_rays += 1;
-            return self.trace(&self.spawn(it, r, f32::INFINITY), depth + 1, rng, c);
+            return self.trace_as(RayKind::Reflection, &self.spawn(it, r, f32::INFINITY), depth + 1, rng, c, rec);
         }
         // The reports' glossy reflection: perturb r inside a square of side
         // 1 / shininess perpendicular to it and average N rays.
@@ -188,28 +214,47 @@ impl<'a> Whitted<'a> {
                 continue; // would enter the surface: no light arrives from there
             }
             c.secondary_rays += 1;
-            sum += self.trace(&self.spawn(it, g, f32::INFINITY), depth + 1, rng, c);
+            sum += self.trace_as(RayKind::Glossy, &self.spawn(it, g, f32::INFINITY), depth + 1, rng, c, rec);
         }
         sum / n as f32
     }
 
     /// Radiance along `ray` at recursion depth `depth`.
     pub fn trace(&self, ray: &Ray, depth: u32, rng: &mut Rng, c: &mut Counters) -> Vec3 {
-        let Some(hit) = self.tracer.intersect(ray) else { return self.scene.background };
+        self.trace_as(RayKind::Camera, ray, depth, rng, c, &mut NoRecorder)
+    }
+
+    /// [`Whitted::trace`] reporting every ray, hit, light sample and shadow ray to `rec`.
+    pub fn trace_as<R: Recorder>(
+        &self,
+        kind: RayKind,
+        ray: &Ray,
+        depth: u32,
+        rng: &mut Rng,
+        c: &mut Counters,
+        rec: &mut R,
+    ) -> Vec3 {
+        rec.begin(kind, ray, depth);
+        let Some(hit) = self.tracer.intersect(ray) else {
+            rec.end(None, self.scene.background);
+            return self.scene.background;
+        };
         let it = self.interaction(ray, &hit);
         let m = &self.scene.materials[it.material as usize];
         let kd = self.diffuse(m, &it, c);
         let d = ray.dir.normalize();
-        let mut color = if self.plan.shading { self.direct(&it, m, kd, -d, rng, c) } else { kd };
+        let mut color = if self.plan.shading { self.direct(&it, m, kd, -d, rng, c, rec) } else { kd };
         let deeper = depth < self.scene.params.max_depth;
         if self.plan.reflections && deeper && m.is_reflective() {
-            color += m.ks * self.reflection(&it, m, d, depth, rng, c);
+            color += m.ks * self.reflection(&it, m, d, depth, rng, c, rec);
         }
         if self.plan.transparency && deeper && m.is_transparent() {
             c.secondary_rays += 1;
-            let behind = self.trace(&self.spawn(&it, d, f32::INFINITY), depth + 1, rng, c);
+            let behind =
+                self.trace_as(RayKind::Transmission, &self.spawn(&it, d, f32::INFINITY), depth + 1, rng, c, rec);
             color = m.opacity * color + (1.0 - m.opacity) * behind;
         }
+        rec.end(Some((&hit, &it)), color);
         color
     }
 }
