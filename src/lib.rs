@@ -6,9 +6,11 @@
 //! differential harness beside it.
 
 pub mod accel;
+pub mod bvh;
 pub mod cli;
 pub mod error;
 pub mod geometry;
 pub mod mesh;
+pub mod rng;
 
 pub use error::{Error, Result};
