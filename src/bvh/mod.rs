@@ -18,6 +18,7 @@ pub mod build_sah;
 pub mod build_sah_volume;
 pub mod node;
 pub mod prims;
+pub mod rays;
 pub mod slab;
 pub mod stats;
 pub mod traverse_basic;
