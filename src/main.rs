@@ -11,11 +11,19 @@ struct Cli {
 }
 
 #[derive(Subcommand)]
-enum Command {}
+enum Command {
+    /// Print BVH statistics (nodes, leaves, levels, leaf sizes, SAH cost, memory, build time) per builder.
+    BvhStats(rtdiff::cli::bvh_stats::BvhStatsArgs),
+    /// Time BVH builds and traversals (and Embree, when built with it) on primary, incoherent and shadow rays.
+    Bench(rtdiff::cli::bench::BenchArgs),
+}
 
 fn main() {
     let cli = Cli::parse();
-    let result: rtdiff::Result<()> = match cli.command {};
+    let result: rtdiff::Result<()> = match cli.command {
+        Command::BvhStats(args) => rtdiff::cli::bvh_stats::run(&args),
+        Command::Bench(args) => rtdiff::cli::bench::run(&args),
+    };
     if let Err(e) = result {
         eprintln!("rtdiff: error: {e}");
         std::process::exit(1);
