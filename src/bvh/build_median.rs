@@ -31,9 +31,7 @@ impl Splitter for MedianSplit {
         let c = &input.centroids;
         // Ties on the coordinate are broken by primitive id, as the reports kept
         // the indices "to differentiate between triangles with the same centroid".
-        idx.select_nth_unstable_by(mid, |&a, &b| {
-            c[a as usize][axis].total_cmp(&c[b as usize][axis]).then(a.cmp(&b))
-        });
+        idx.select_nth_unstable_by(mid, |&a, &b| c[a as usize][axis].total_cmp(&c[b as usize][axis]).then(a.cmp(&b)));
         Some(mid)
     }
 }

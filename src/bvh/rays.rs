@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 
-use crate::geometry::offset::{SpawnOffset, sphere_point_error, spawn_origin, triangle_point_error};
+use crate::geometry::offset::{SpawnOffset, spawn_origin, sphere_point_error, triangle_point_error};
 use crate::geometry::{Aabb, Hit, Primitives, Ray};
 use crate::mesh::Mesh;
 use crate::rng::Pcg32;
@@ -86,7 +86,13 @@ pub fn surface_point(prims: &Primitives, ray: &Ray, hit: &Hit) -> (Vec3, Vec3, V
 
 /// Shadow rays from every hit of `rays` towards `light`, leaving the surface
 /// under `policy`. Each ray spans `[0, 1]` with `dir = light - origin`.
-pub fn shadow_rays(prims: &Primitives, rays: &[Ray], hits: &[Option<Hit>], light: Vec3, policy: SpawnOffset) -> Vec<Ray> {
+pub fn shadow_rays(
+    prims: &Primitives,
+    rays: &[Ray],
+    hits: &[Option<Hit>],
+    light: Vec3,
+    policy: SpawnOffset,
+) -> Vec<Ray> {
     rays.iter()
         .zip(hits)
         .filter_map(|(r, h)| {

@@ -44,10 +44,14 @@ const _: () = assert!(std::mem::size_of::<WideNode>() == 256);
 
 impl WideNode {
     const EMPTY: WideNode = WideNode {
-        b: [[f32::INFINITY; WIDTH], [f32::INFINITY; WIDTH], [f32::INFINITY; WIDTH], [f32::NEG_INFINITY; WIDTH], [
-            f32::NEG_INFINITY;
-            WIDTH
-        ], [f32::NEG_INFINITY; WIDTH]],
+        b: [
+            [f32::INFINITY; WIDTH],
+            [f32::INFINITY; WIDTH],
+            [f32::INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+        ],
         child: [u32::MAX; WIDTH],
         count: [0; WIDTH],
     };
@@ -380,4 +384,3 @@ fn box8_avx2(n: &WideNode, p: &WidePre, cull: f32) -> (u32, [f32; WIDTH]) {
     unsafe { _mm256_storeu_ps(near.as_mut_ptr(), tn) };
     (mask, near)
 }
-

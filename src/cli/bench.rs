@@ -127,10 +127,19 @@ pub fn run(args: &BenchArgs) -> Result<()> {
 
 fn bench_scene(args: &BenchArgs, prims: Arc<Primitives>) -> Result<()> {
     let one = single_pool()?;
-    let builders =
-        if args.builder.is_empty() { vec![Builder::Median, Builder::SahVolume, Builder::Sah] } else { args.builder.clone() };
+    let builders = if args.builder.is_empty() {
+        vec![Builder::Median, Builder::SahVolume, Builder::Sah]
+    } else {
+        args.builder.clone()
+    };
     let traversals = if args.traversal.is_empty() {
-        vec![Traversal::Basic, Traversal::PriorityQueue, Traversal::SortedVector, Traversal::NthElement, Traversal::Fast]
+        vec![
+            Traversal::Basic,
+            Traversal::PriorityQueue,
+            Traversal::SortedVector,
+            Traversal::NthElement,
+            Traversal::Fast,
+        ]
     } else {
         args.traversal.clone()
     };

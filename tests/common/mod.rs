@@ -19,9 +19,13 @@ pub fn load_mesh(name: &str) -> Mesh {
 pub fn all_configs() -> Vec<AccelConfig> {
     let mut v = Vec::new();
     for builder in [Builder::Median, Builder::SahVolume, Builder::Sah] {
-        for traversal in
-            [Traversal::Basic, Traversal::PriorityQueue, Traversal::SortedVector, Traversal::NthElement, Traversal::Fast]
-        {
+        for traversal in [
+            Traversal::Basic,
+            Traversal::PriorityQueue,
+            Traversal::SortedVector,
+            Traversal::NthElement,
+            Traversal::Fast,
+        ] {
             v.push(AccelConfig { builder, traversal, ..Default::default() });
         }
     }
@@ -76,13 +80,7 @@ pub fn spheres() -> Primitives {
         .collect();
     let mut triangles = Vec::new();
     let y = -1.2;
-    quad(
-        &mut triangles,
-        Vec3::new(-2., y, -2.),
-        Vec3::new(2., y, -2.),
-        Vec3::new(2., y, 2.),
-        Vec3::new(-2., y, 2.),
-    );
+    quad(&mut triangles, Vec3::new(-2., y, -2.), Vec3::new(2., y, -2.), Vec3::new(2., y, 2.), Vec3::new(-2., y, 2.));
     Primitives { triangles, spheres }
 }
 
