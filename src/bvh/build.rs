@@ -5,7 +5,7 @@
 
 use std::time::{Duration, Instant};
 
-use glam::Vec3;
+use glam::Vec3A;
 use rayon::prelude::*;
 
 use crate::accel::Builder;
@@ -16,32 +16,78 @@ use super::{LeafPrims, Node};
 /// Nodes with at least this many primitives build their two subtrees in parallel.
 const PARALLEL_THRESHOLD: usize = 4096;
 
+/// A box in SIMD-friendly form for the builders' inner loops.
+#[derive(Clone, Copy, Debug)]
+pub struct BoxA {
+    /// Lower corner.
+    pub min: Vec3A,
+    /// Upper corner.
+    pub max: Vec3A,
+}
+
+impl BoxA {
+    /// The empty box.
+    pub const EMPTY: BoxA = BoxA { min: Vec3A::INFINITY, max: Vec3A::NEG_INFINITY };
+
+    /// Smallest box containing both.
+    #[inline(always)]
+    pub fn union(self, o: BoxA) -> BoxA {
+        BoxA { min: self.min.min(o.min), max: self.max.max(o.max) }
+    }
+
+    /// This box grown to contain `p`.
+    #[inline(always)]
+    pub fn grow(self, p: Vec3A) -> BoxA {
+        BoxA { min: self.min.min(p), max: self.max.max(p) }
+    }
+
+    /// As an [`Aabb`].
+    #[inline]
+    pub fn aabb(self) -> Aabb {
+        Aabb::new(self.min.into(), self.max.into())
+    }
+
+    /// Surface area (0 for an empty box).
+    #[inline(always)]
+    pub fn half_area(self) -> f32 {
+        let e = (self.max - self.min).max(Vec3A::ZERO);
+        e.x * e.y + e.y * e.z + e.z * e.x
+    }
+}
+
 /// Per-primitive data the split strategies read.
 pub struct BuildInput {
     /// Bounding box of each primitive.
-    pub bounds: Vec<Aabb>,
+    pub bounds: Vec<BoxA>,
     /// Centre of each primitive's box.
-    pub centroids: Vec<Vec3>,
+    pub centroids: Vec<Vec3A>,
 }
 
 impl BuildInput {
     /// Boxes and centroids of every primitive (computed in parallel).
     pub fn new(prims: &Primitives) -> Self {
-        let bounds: Vec<Aabb> = (0..prims.len()).into_par_iter().map(|i| prims.bounds(i)).collect();
-        let centroids = bounds.par_iter().map(|b| b.center()).collect();
+        let bounds: Vec<BoxA> = (0..prims.len())
+            .into_par_iter()
+            .with_min_len(4096)
+            .map(|i| {
+                let b = prims.bounds(i);
+                BoxA { min: b.min.into(), max: b.max.into() }
+            })
+            .collect();
+        let centroids = bounds.par_iter().with_min_len(4096).map(|b| (b.min + b.max) * 0.5).collect();
         Self { bounds, centroids }
     }
 
     /// Union of the boxes of `idx`.
     #[inline]
     pub fn bounds_of(&self, idx: &[u32]) -> Aabb {
-        idx.iter().fold(Aabb::EMPTY, |b, &i| b.union(self.bounds[i as usize]))
+        idx.iter().fold(BoxA::EMPTY, |b, &i| b.union(self.bounds[i as usize])).aabb()
     }
 
     /// Box around the centroids of `idx`.
     #[inline]
-    pub fn centroid_bounds_of(&self, idx: &[u32]) -> Aabb {
-        idx.iter().fold(Aabb::EMPTY, |b, &i| b.grow(self.centroids[i as usize]))
+    pub fn centroid_bounds_of(&self, idx: &[u32]) -> BoxA {
+        idx.iter().fold(BoxA::EMPTY, |b, &i| b.grow(self.centroids[i as usize]))
     }
 }
 
@@ -52,8 +98,23 @@ pub trait Splitter: Sync {
 
     /// Reorder `idx` (the primitives of a node with box `bounds` at level
     /// `depth`) and return `m` with `0 < m < idx.len()` to split it into
-    /// `idx[..m]` and `idx[m..]`, or `None` to make the node a leaf.
-    fn split(&self, input: &BuildInput, idx: &mut [u32], bounds: &Aabb, depth: u32) -> Option<usize>;
+    /// `idx[..m]` and `idx[m..]`, or `None` to make the node a leaf. May also
+    /// return the exact boxes of the two sides when it has them.
+    fn split(&self, input: &BuildInput, idx: &mut [u32], bounds: &Aabb, depth: u32) -> Option<Split>;
+}
+
+/// Where a node is cut.
+pub struct Split {
+    /// Number of primitives going left.
+    pub mid: usize,
+    /// Boxes of the left and right sides, if the strategy computed them.
+    pub bounds: Option<(Aabb, Aabb)>,
+}
+
+impl From<usize> for Split {
+    fn from(mid: usize) -> Self {
+        Split { mid, bounds: None }
+    }
 }
 
 /// A built binary BVH: flattened nodes plus the reordered primitives.
@@ -76,34 +137,43 @@ pub fn build_with(prims: &Primitives, splitter: &dyn Splitter, builder: Builder)
     let mut idx: Vec<u32> = (0..prims.len() as u32).collect();
     let mut nodes = Vec::with_capacity(2 * prims.len().max(1));
     if !idx.is_empty() {
-        build_node(splitter, &input, &mut idx, 0, 0, &mut nodes);
+        let root = input.bounds_of(&idx);
+        build_node(splitter, &input, &mut idx, root, 0, 0, &mut nodes);
     }
     let leaf_prims = LeafPrims::new(prims, &idx);
     BinaryBvh { nodes, prims: leaf_prims, builder, build_time: start.elapsed() }
 }
 
-fn build_node(s: &dyn Splitter, input: &BuildInput, idx: &mut [u32], first: u32, depth: u32, out: &mut Vec<Node>) {
+fn build_node(
+    s: &dyn Splitter,
+    input: &BuildInput,
+    idx: &mut [u32],
+    bounds: Aabb,
+    first: u32,
+    depth: u32,
+    out: &mut Vec<Node>,
+) {
     let n = idx.len();
-    let bounds = input.bounds_of(idx);
     let me = out.len();
     out.push(Node::leaf(bounds, first, n as u32));
     if n <= 1 || depth >= s.max_depth() {
         return;
     }
-    let Some(mid) = s.split(input, idx, &bounds, depth) else { return };
+    let Some(Split { mid, bounds: child_bounds }) = s.split(input, idx, &bounds, depth) else { return };
     assert!(mid > 0 && mid < n, "split strategy returned an empty side");
     let (l, r) = idx.split_at_mut(mid);
+    let (lb, rb) = child_bounds.unwrap_or_else(|| (input.bounds_of(l), input.bounds_of(r)));
     let right_first = first + mid as u32;
     if n >= PARALLEL_THRESHOLD {
         let (lv, rv) = rayon::join(
             || {
                 let mut v = Vec::with_capacity(2 * l.len());
-                build_node(s, input, l, first, depth + 1, &mut v);
+                build_node(s, input, l, lb, first, depth + 1, &mut v);
                 v
             },
             || {
                 let mut v = Vec::with_capacity(2 * r.len());
-                build_node(s, input, r, right_first, depth + 1, &mut v);
+                build_node(s, input, r, rb, right_first, depth + 1, &mut v);
                 v
             },
         );
@@ -112,9 +182,9 @@ fn build_node(s: &dyn Splitter, input: &BuildInput, idx: &mut [u32], first: u32,
         append_shifted(out, &rv);
         out[me] = Node::interior(bounds, right);
     } else {
-        build_node(s, input, l, first, depth + 1, out);
+        build_node(s, input, l, lb, first, depth + 1, out);
         let right = out.len() as u32;
-        build_node(s, input, r, right_first, depth + 1, out);
+        build_node(s, input, r, rb, right_first, depth + 1, out);
         out[me] = Node::interior(bounds, right);
     }
 }

@@ -6,7 +6,7 @@
 use crate::accel::Builder;
 use crate::geometry::{Aabb, Primitives};
 
-use super::build::{BinaryBvh, BuildInput, Splitter, build_with};
+use super::build::{BinaryBvh, BuildInput, Split, Splitter, build_with};
 
 /// The reports' maximum tree level.
 pub const MEDIAN_MAX_DEPTH: u32 = 100;
@@ -22,7 +22,7 @@ impl Splitter for MedianSplit {
         MEDIAN_MAX_DEPTH
     }
 
-    fn split(&self, input: &BuildInput, idx: &mut [u32], _bounds: &Aabb, depth: u32) -> Option<usize> {
+    fn split(&self, input: &BuildInput, idx: &mut [u32], _bounds: &Aabb, depth: u32) -> Option<Split> {
         if idx.len() <= self.leaf_size.max(1) {
             return None;
         }
@@ -32,7 +32,7 @@ impl Splitter for MedianSplit {
         // Ties on the coordinate are broken by primitive id, as the reports kept
         // the indices "to differentiate between triangles with the same centroid".
         idx.select_nth_unstable_by(mid, |&a, &b| c[a as usize][axis].total_cmp(&c[b as usize][axis]).then(a.cmp(&b)));
-        Some(mid)
+        Some(mid.into())
     }
 }
 

@@ -10,7 +10,7 @@
 use crate::accel::Builder;
 use crate::geometry::{Aabb, Primitives};
 
-use super::build::{BinaryBvh, BuildInput, Splitter, build_with, partition};
+use super::build::{BinaryBvh, BuildInput, Split, Splitter, build_with, partition};
 
 /// The reports' bin count.
 pub const VOLUME_BINS: usize = 5;
@@ -26,7 +26,7 @@ impl Splitter for VolumeSplit {
         VOLUME_MAX_DEPTH
     }
 
-    fn split(&self, input: &BuildInput, idx: &mut [u32], bounds: &Aabb, _depth: u32) -> Option<usize> {
+    fn split(&self, input: &BuildInput, idx: &mut [u32], bounds: &Aabb, _depth: u32) -> Option<Split> {
         let axis = bounds.largest_axis();
         let low = bounds.min[axis];
         let length = bounds.extent()[axis];
@@ -42,11 +42,11 @@ impl Splitter for VolumeSplit {
         for &i in idx.iter() {
             let b = bin(i);
             count[b] += 1;
-            boxes[b] = boxes[b].union(input.bounds[i as usize]);
+            boxes[b] = boxes[b].union(input.bounds[i as usize].aabb());
         }
         let n = idx.len();
         let mut best_cost = n as f32 * bounds.volume();
-        let mut best: Option<(usize, usize)> = None; // (split, imbalance)
+        let mut best: Option<(usize, usize, Aabb, Aabb)> = None; // (split, imbalance, boxes)
         for s in 0..VOLUME_BINS - 1 {
             let nl: usize = count[..=s].iter().sum();
             let nr = n - nl;
@@ -57,13 +57,13 @@ impl Splitter for VolumeSplit {
             let br = boxes[s + 1..].iter().fold(Aabb::EMPTY, |a, &b| a.union(b));
             let cost = nl as f32 * bl.volume() + nr as f32 * br.volume();
             let imbalance = nl.abs_diff(nr);
-            if cost < best_cost || (cost == best_cost && best.is_some_and(|(_, d)| imbalance < d)) {
+            if cost < best_cost || (cost == best_cost && best.is_some_and(|(_, d, _, _)| imbalance < d)) {
                 best_cost = cost;
-                best = Some((s, imbalance));
+                best = Some((s, imbalance, bl, br));
             }
         }
-        let (s, _) = best?;
-        Some(partition(idx, |i| bin(i) <= s))
+        let (s, _, bl, br) = best?;
+        Some(Split { mid: partition(idx, |i| bin(i) <= s), bounds: Some((bl, br)) })
     }
 }
 

@@ -47,6 +47,19 @@ pub fn build_binary(prims: &Primitives, cfg: &AccelConfig) -> BinaryBvh {
     }
 }
 
+/// Build the binary BVH `cfg` asks for and its 8-wide collapse, and gather
+/// their statistics (`build_ms` covers the binary build plus the collapse).
+pub fn stats_for(prims: &Primitives, cfg: &AccelConfig) -> BvhStats {
+    let bin = build_binary(prims, cfg);
+    let mut stats = BvhStats::of(&bin, None);
+    let start = std::time::Instant::now();
+    let wide = WideBvh::from_binary(bin);
+    stats.build_ms += start.elapsed().as_secs_f64() * 1e3;
+    stats.wide_nodes = wide.nodes.len();
+    stats.wide_bytes = wide.bytes();
+    stats
+}
+
 /// The tree a [`BvhTracer`] walks.
 enum Tree {
     Binary(BinaryBvh),
@@ -59,31 +72,14 @@ pub struct BvhTracer {
     builder: Builder,
     traversal: Traversal,
     test: TriangleTest,
-    stats: BvhStats,
 }
 
 impl BvhTracer {
     /// Build the BVH `cfg` asks for (the `fast` traversal also collapses it to 8-wide nodes).
     pub fn new(prims: &Primitives, cfg: &AccelConfig) -> Self {
         let bin = build_binary(prims, cfg);
-        let (tree, stats) = if cfg.traversal == Traversal::Fast {
-            let mut stats = BvhStats::of(&bin, None);
-            let start = std::time::Instant::now();
-            let w = WideBvh::from_binary(bin);
-            stats.build_ms += start.elapsed().as_secs_f64() * 1e3;
-            stats.wide_nodes = w.nodes.len();
-            stats.wide_bytes = w.bytes();
-            (Tree::Wide(w), stats)
-        } else {
-            let stats = BvhStats::of(&bin, None);
-            (Tree::Binary(bin), stats)
-        };
-        Self { tree, builder: cfg.builder, traversal: cfg.traversal, test: cfg.triangle_test, stats }
-    }
-
-    /// Statistics of the built tree (`build_ms` includes the wide collapse for `fast`).
-    pub fn stats(&self) -> &BvhStats {
-        &self.stats
+        let tree = if cfg.traversal == Traversal::Fast { Tree::Wide(WideBvh::from_binary(bin)) } else { Tree::Binary(bin) };
+        Self { tree, builder: cfg.builder, traversal: cfg.traversal, test: cfg.triangle_test }
     }
 
     /// Use the portable scalar box test in the `fast` traversal even when AVX2 is available.

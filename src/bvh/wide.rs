@@ -276,21 +276,30 @@ fn avx2_available() -> bool {
 fn collapse(bin: &[Node], i: usize, out: &mut Vec<WideNode>) -> u32 {
     let me = out.len();
     out.push(WideNode::EMPTY);
-    let mut kids: Vec<usize> = if bin[i].is_leaf() { vec![i] } else { vec![i + 1, bin[i].offset as usize] };
-    while kids.len() < WIDTH {
-        let open = kids
-            .iter()
-            .enumerate()
-            .filter(|(_, k)| !bin[**k].is_leaf())
-            .max_by(|a, b| bin[*a.1].bounds().surface_area().total_cmp(&bin[*b.1].bounds().surface_area()))
-            .map(|(j, _)| j);
-        let Some(j) = open else { break };
-        let k = kids[j];
-        kids[j] = k + 1;
-        kids.push(bin[k].offset as usize);
+    // (binary node, surface area; negative for leaves, which are never opened)
+    let area = |k: usize| if bin[k].is_leaf() { -1.0 } else { bin[k].bounds().surface_area() };
+    let mut kids = [(0usize, 0.0f32); WIDTH];
+    let mut len = if bin[i].is_leaf() {
+        kids[0] = (i, -1.0);
+        1
+    } else {
+        let (l, r) = (i + 1, bin[i].offset as usize);
+        kids[0] = (l, area(l));
+        kids[1] = (r, area(r));
+        2
+    };
+    while len < WIDTH {
+        let (j, &(k, a)) = kids[..len].iter().enumerate().max_by(|x, y| x.1.1.total_cmp(&y.1.1)).unwrap_or((0, &(0, -1.0)));
+        if a < 0.0 {
+            break; // only leaves left
+        }
+        let (l, r) = (k + 1, bin[k].offset as usize);
+        kids[j] = (l, area(l));
+        kids[len] = (r, area(r));
+        len += 1;
     }
     let mut node = WideNode::EMPTY;
-    for (lane, &k) in kids.iter().enumerate() {
+    for (lane, &(k, _)) in kids[..len].iter().enumerate() {
         let n = &bin[k];
         if n.is_leaf() {
             node.set_lane(lane, n, n.offset, n.count);

@@ -84,16 +84,52 @@ fn disagreements(a: &Answers, b: &Answers) -> usize {
     }
 }
 
-/// Time `f` `runs` times; median seconds and the first result.
-fn timed<T>(runs: usize, mut f: impl FnMut() -> T) -> (f64, T) {
+/// CPU time consumed by the calling thread, in seconds (unaffected by other
+/// processes competing for the cores of a shared machine).
+#[cfg(unix)]
+fn thread_cpu_seconds() -> Option<f64> {
+    let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
+    // SAFETY: ts is a valid, writable timespec.
+    let rc = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+    (rc == 0).then(|| ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9)
+}
+
+#[cfg(not(unix))]
+fn thread_cpu_seconds() -> Option<f64> {
+    None
+}
+
+/// A stopwatch: the thread's CPU time for single-threaded work (when the
+/// platform has it), wall-clock time otherwise.
+struct Clock {
+    cpu: bool,
+}
+
+impl Clock {
+    fn now(&self) -> (Instant, Option<f64>) {
+        (Instant::now(), if self.cpu { thread_cpu_seconds() } else { None })
+    }
+
+    fn since(&self, start: (Instant, Option<f64>)) -> f64 {
+        match (start.1, if self.cpu { thread_cpu_seconds() } else { None }) {
+            (Some(a), Some(b)) => b - a,
+            _ => start.0.elapsed().as_secs_f64(),
+        }
+    }
+}
+
+/// Time `f` `runs` times; median seconds and the first result. With
+/// `cpu_time`, measures the calling thread's CPU time (single-threaded work only).
+fn timed<T>(runs: usize, cpu_time: bool, mut f: impl FnMut() -> T) -> (f64, T) {
+    let clock = Clock { cpu: cpu_time };
     let mut times = Vec::with_capacity(runs);
-    let start = Instant::now();
+    let start = clock.now();
     let first = f();
-    times.push(start.elapsed().as_secs_f64());
+    times.push(clock.since(start));
     for _ in 1..runs {
-        let start = Instant::now();
+        let start = clock.now();
         std::hint::black_box(f());
-        times.push(start.elapsed().as_secs_f64());
+        times.push(clock.since(start));
     }
     (median(times), first)
 }
@@ -145,14 +181,17 @@ fn bench_scene(args: &BenchArgs, prims: Arc<Primitives>) -> Result<()> {
     };
 
     // Build times.
-    println!("\n### Build (median of {} runs; ms)", args.runs);
+    println!(
+        "\n### Build (median of {} runs; ms; 1 thread = CPU time of the building thread, all threads = wall clock)",
+        args.runs
+    );
     println!("{:<28} {:>12} {:>12}", "structure", "1 thread", "all threads");
     let mut configs: Vec<AccelConfig> = Vec::new();
     for &builder in &builders {
         for (label, traversal) in [("binary", Traversal::Basic), ("binary + 8-wide", Traversal::Fast)] {
             let cfg = AccelConfig { builder, traversal, ..Default::default() };
-            let (t1, _) = one.install(|| timed(args.runs, || build_tracer(prims.clone(), &cfg).map(|_| ())));
-            let (tn, _) = timed(args.runs, || build_tracer(prims.clone(), &cfg).map(|_| ()));
+            let (t1, _) = one.install(|| timed(args.runs, true, || build_tracer(prims.clone(), &cfg).map(|_| ())));
+            let (tn, _) = timed(args.runs, false, || build_tracer(prims.clone(), &cfg).map(|_| ()));
             let name = format!("bvh-{} {label}", value_name(&builder));
             println!("{name:<28} {:>12.2} {:>12.2}", t1 * 1e3, tn * 1e3);
         }
@@ -162,7 +201,7 @@ fn bench_scene(args: &BenchArgs, prims: Arc<Primitives>) -> Result<()> {
     }
     for q in [EmbreeQuality::Low, EmbreeQuality::Medium, EmbreeQuality::High] {
         let cfg = AccelConfig { backend: Backend::Embree, embree_quality: q, ..Default::default() };
-        match timed(args.runs, || build_tracer(prims.clone(), &cfg).map(|_| ())) {
+        match timed(args.runs, false, || build_tracer(prims.clone(), &cfg).map(|_| ())) {
             (t, Ok(())) => {
                 println!("{:<28} {:>12} {:>12.2}", format!("embree {}", value_name(&q)), "-", t * 1e3);
                 configs.push(cfg);
@@ -195,7 +234,11 @@ fn bench_scene(args: &BenchArgs, prims: Arc<Primitives>) -> Result<()> {
     for &parallel in modes {
         println!(
             "\n### Traversal, {} (Mrays/s, median of {} runs; x = ratio to the same builder's basic; diff = rays whose hit primitive differs from bvh-sah/fast)",
-            if parallel { format!("{} threads", rayon::current_num_threads()) } else { "1 thread".into() },
+            if parallel {
+                format!("{} threads, wall clock", rayon::current_num_threads())
+            } else {
+                "1 thread, CPU time of the tracing thread".into()
+            },
             args.runs
         );
         println!(
@@ -209,9 +252,9 @@ fn bench_scene(args: &BenchArgs, prims: Arc<Primitives>) -> Result<()> {
             let mut diff = 0;
             for (k, (_, rays, any)) in set_list.iter().enumerate() {
                 let (t, ans) = if parallel {
-                    timed(args.runs, || trace(tracer.as_ref(), rays, *any, true))
+                    timed(args.runs, false, || trace(tracer.as_ref(), rays, *any, true))
                 } else {
-                    one.install(|| timed(args.runs, || trace(tracer.as_ref(), rays, *any, false)))
+                    one.install(|| timed(args.runs, true, || trace(tracer.as_ref(), rays, *any, false)))
                 };
                 mr[k] = rays.len() as f64 / t / 1e6;
                 diff += disagreements(&ans, &refs[k]);

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use crate::accel::{AccelConfig, Builder, Traversal};
-use crate::bvh::{BvhStats, BvhTracer};
+use crate::bvh::BvhStats;
 use crate::error::{Error, Result};
 use crate::geometry::Primitives;
 
@@ -72,7 +72,7 @@ pub fn run(args: &BvhStatsArgs) -> Result<()> {
                 bins: args.bins,
                 ..Default::default()
             };
-            BvhTracer::new(&prims, &cfg).stats().clone()
+            crate::bvh::stats_for(&prims, &cfg)
         })
         .collect();
     if args.json {
