@@ -78,7 +78,8 @@ impl BvhTracer {
     /// Build the BVH `cfg` asks for (the `fast` traversal also collapses it to 8-wide nodes).
     pub fn new(prims: &Primitives, cfg: &AccelConfig) -> Self {
         let bin = build_binary(prims, cfg);
-        let tree = if cfg.traversal == Traversal::Fast { Tree::Wide(WideBvh::from_binary(bin)) } else { Tree::Binary(bin) };
+        let tree =
+            if cfg.traversal == Traversal::Fast { Tree::Wide(WideBvh::from_binary(bin)) } else { Tree::Binary(bin) };
         Self { tree, builder: cfg.builder, traversal: cfg.traversal, test: cfg.triangle_test }
     }
 

@@ -71,6 +71,98 @@ impl WideNode {
     }
 }
 
+/// A ray prepared for 8-wide box tests.
+#[derive(Clone, Copy)]
+struct WidePre {
+    o: Vec3,
+    inv: Vec3,
+    /// Row of `WideNode::b` holding the near plane of each axis.
+    near_row: [usize; 3],
+    /// Row holding the far plane.
+    far_row: [usize; 3],
+    t_min: f32,
+}
+
+impl WidePre {
+    #[inline(always)]
+    fn new(ray: &Ray) -> Self {
+        let inv = ray.dir.recip();
+        let neg = [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0];
+        Self {
+            o: ray.origin,
+            inv,
+            near_row: [0, 1, 2].map(|a| a + 3 * neg[a] as usize),
+            far_row: [0, 1, 2].map(|a| a + 3 * (!neg[a]) as usize),
+            t_min: ray.t_min,
+        }
+    }
+}
+
+/// Scalar 8-lane box test: hit mask and entry distances (same arithmetic as
+/// [`super::slab::RayPre::hit`]).
+#[inline(always)]
+fn box8_scalar(n: &WideNode, p: &WidePre, cull: f32) -> (u32, [f32; WIDTH]) {
+    let s = far_scale();
+    let mut mask = 0;
+    let mut near = [0.0; WIDTH];
+    for l in 0..WIDTH {
+        let tn_x = (n.b[p.near_row[0]][l] - p.o.x) * p.inv.x;
+        let tn_y = (n.b[p.near_row[1]][l] - p.o.y) * p.inv.y;
+        let tn_z = (n.b[p.near_row[2]][l] - p.o.z) * p.inv.z;
+        let tf_x = (n.b[p.far_row[0]][l] - p.o.x) * p.inv.x * s;
+        let tf_y = (n.b[p.far_row[1]][l] - p.o.y) * p.inv.y * s;
+        let tf_z = (n.b[p.far_row[2]][l] - p.o.z) * p.inv.z * s;
+        let tn = tn_x.max(tn_y).max(tn_z).max(p.t_min);
+        let tf = tf_x.min(tf_y).min(tf_z).min(cull);
+        near[l] = tn;
+        mask |= u32::from(tn <= tf) << l;
+    }
+    (mask, near)
+}
+
+/// AVX2 8-lane box test, expanded inside the AVX2 traversal functions (a
+/// macro rather than a function so it is always inlined into them).
+/// `_mm256_max_ps`/`_mm256_min_ps` return their second operand when either is
+/// NaN, so the possibly-NaN slab distance always goes first: a NaN slab
+/// (origin on the plane, ray parallel) imposes nothing, exactly like
+/// `f32::max`/`f32::min` in [`box8_scalar`].
+#[cfg(target_arch = "x86_64")]
+macro_rules! box8_avx2 {
+    ($n:expr, $p:expr, $cull:expr) => {{
+        use std::arch::x86_64::*;
+        let (n, p): (&WideNode, &WidePre) = ($n, $p);
+        let ox = _mm256_set1_ps(p.o.x);
+        let oy = _mm256_set1_ps(p.o.y);
+        let oz = _mm256_set1_ps(p.o.z);
+        let ix = _mm256_set1_ps(p.inv.x);
+        let iy = _mm256_set1_ps(p.inv.y);
+        let iz = _mm256_set1_ps(p.inv.z);
+        let s = _mm256_set1_ps(far_scale());
+        // SAFETY: each row is 32 bytes inside a 64-byte aligned node, so aligned loads are valid.
+        let ld = |row: usize| unsafe { _mm256_load_ps(n.b[row].as_ptr()) };
+        let tn_x = _mm256_mul_ps(_mm256_sub_ps(ld(p.near_row[0]), ox), ix);
+        let tn_y = _mm256_mul_ps(_mm256_sub_ps(ld(p.near_row[1]), oy), iy);
+        let tn_z = _mm256_mul_ps(_mm256_sub_ps(ld(p.near_row[2]), oz), iz);
+        let tf_x = _mm256_mul_ps(_mm256_mul_ps(_mm256_sub_ps(ld(p.far_row[0]), ox), ix), s);
+        let tf_y = _mm256_mul_ps(_mm256_mul_ps(_mm256_sub_ps(ld(p.far_row[1]), oy), iy), s);
+        let tf_z = _mm256_mul_ps(_mm256_mul_ps(_mm256_sub_ps(ld(p.far_row[2]), oz), iz), s);
+        let tn = _mm256_max_ps(tn_x, _mm256_max_ps(tn_y, _mm256_max_ps(tn_z, _mm256_set1_ps(p.t_min))));
+        let tf = _mm256_min_ps(tf_x, _mm256_min_ps(tf_y, _mm256_min_ps(tf_z, _mm256_set1_ps($cull))));
+        let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
+        let mut near = [0.0f32; WIDTH];
+        // SAFETY: near has room for 8 floats; storeu has no alignment requirement.
+        unsafe { _mm256_storeu_ps(near.as_mut_ptr(), tn) };
+        (mask, near)
+    }};
+}
+
+/// [`box8_scalar`] in the calling convention of the box-test macros.
+macro_rules! box8_portable {
+    ($n:expr, $p:expr, $cull:expr) => {
+        box8_scalar($n, $p, $cull)
+    };
+}
+
 /// A pending child: entry distance, node or first primitive, primitive count (0 = inner node).
 #[derive(Clone, Copy)]
 struct Entry {
@@ -93,8 +185,7 @@ macro_rules! closest {
         'outer: loop {
             if cur.count == 0 {
                 let node = &$self.nodes[cur.child as usize];
-                #[allow(unused_unsafe)]
-                let (mut mask, near) = unsafe { $box8(node, &pre, cull) };
+                let (mut mask, near) = $box8!(node, &pre, cull);
                 if mask != 0 {
                     let first = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
@@ -165,8 +256,7 @@ macro_rules! any_hit {
                 continue;
             }
             let node = &$self.nodes[child as usize];
-            #[allow(unused_unsafe)]
-            let (mut mask, _) = unsafe { $box8(node, &pre, cull) };
+            let (mut mask, _) = $box8!(node, &pre, cull);
             while mask != 0 {
                 let l = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
@@ -242,11 +332,11 @@ impl WideBvh {
     }
 
     fn intersect_scalar(&self, ray: &Ray, test: TriangleTest) -> Option<Hit> {
-        closest!(self, ray, test, box8_scalar)
+        closest!(self, ray, test, box8_portable)
     }
 
     fn occluded_scalar(&self, ray: &Ray, test: TriangleTest) -> bool {
-        any_hit!(self, ray, test, box8_scalar)
+        any_hit!(self, ray, test, box8_portable)
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -289,7 +379,8 @@ fn collapse(bin: &[Node], i: usize, out: &mut Vec<WideNode>) -> u32 {
         2
     };
     while len < WIDTH {
-        let (j, &(k, a)) = kids[..len].iter().enumerate().max_by(|x, y| x.1.1.total_cmp(&y.1.1)).unwrap_or((0, &(0, -1.0)));
+        let (j, &(k, a)) =
+            kids[..len].iter().enumerate().max_by(|x, y| x.1.1.total_cmp(&y.1.1)).unwrap_or((0, &(0, -1.0)));
         if a < 0.0 {
             break; // only leaves left
         }
@@ -310,86 +401,4 @@ fn collapse(bin: &[Node], i: usize, out: &mut Vec<WideNode>) -> u32 {
     }
     out[me] = node;
     me as u32
-}
-
-/// A ray prepared for 8-wide box tests.
-#[derive(Clone, Copy)]
-struct WidePre {
-    o: Vec3,
-    inv: Vec3,
-    /// Row of `WideNode::b` holding the near plane of each axis.
-    near_row: [usize; 3],
-    /// Row holding the far plane.
-    far_row: [usize; 3],
-    t_min: f32,
-}
-
-impl WidePre {
-    #[inline(always)]
-    fn new(ray: &Ray) -> Self {
-        let inv = ray.dir.recip();
-        let neg = [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0];
-        Self {
-            o: ray.origin,
-            inv,
-            near_row: [0, 1, 2].map(|a| a + 3 * neg[a] as usize),
-            far_row: [0, 1, 2].map(|a| a + 3 * (!neg[a]) as usize),
-            t_min: ray.t_min,
-        }
-    }
-}
-
-/// Scalar 8-lane box test: hit mask and entry distances (same arithmetic as
-/// [`super::slab::RayPre::hit`]).
-#[inline(always)]
-fn box8_scalar(n: &WideNode, p: &WidePre, cull: f32) -> (u32, [f32; WIDTH]) {
-    let s = far_scale();
-    let mut mask = 0;
-    let mut near = [0.0; WIDTH];
-    for l in 0..WIDTH {
-        let tn_x = (n.b[p.near_row[0]][l] - p.o.x) * p.inv.x;
-        let tn_y = (n.b[p.near_row[1]][l] - p.o.y) * p.inv.y;
-        let tn_z = (n.b[p.near_row[2]][l] - p.o.z) * p.inv.z;
-        let tf_x = (n.b[p.far_row[0]][l] - p.o.x) * p.inv.x * s;
-        let tf_y = (n.b[p.far_row[1]][l] - p.o.y) * p.inv.y * s;
-        let tf_z = (n.b[p.far_row[2]][l] - p.o.z) * p.inv.z * s;
-        let tn = tn_x.max(tn_y).max(tn_z).max(p.t_min);
-        let tf = tf_x.min(tf_y).min(tf_z).min(cull);
-        near[l] = tn;
-        mask |= u32::from(tn <= tf) << l;
-    }
-    (mask, near)
-}
-
-/// AVX2 8-lane box test. `_mm256_max_ps`/`_mm256_min_ps` return their second
-/// operand when either is NaN, so the possibly-NaN slab distance always goes
-/// first: a NaN slab (origin on the plane, ray parallel) imposes nothing,
-/// exactly like `f32::max`/`f32::min` in the scalar version.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-#[inline]
-fn box8_avx2(n: &WideNode, p: &WidePre, cull: f32) -> (u32, [f32; WIDTH]) {
-    use std::arch::x86_64::*;
-    let ox = _mm256_set1_ps(p.o.x);
-    let oy = _mm256_set1_ps(p.o.y);
-    let oz = _mm256_set1_ps(p.o.z);
-    let ix = _mm256_set1_ps(p.inv.x);
-    let iy = _mm256_set1_ps(p.inv.y);
-    let iz = _mm256_set1_ps(p.inv.z);
-    let s = _mm256_set1_ps(far_scale());
-    // SAFETY: each row is 32 bytes inside a 64-byte aligned node, so aligned loads are valid.
-    let ld = |row: usize| unsafe { _mm256_load_ps(n.b[row].as_ptr()) };
-    let tn_x = _mm256_mul_ps(_mm256_sub_ps(ld(p.near_row[0]), ox), ix);
-    let tn_y = _mm256_mul_ps(_mm256_sub_ps(ld(p.near_row[1]), oy), iy);
-    let tn_z = _mm256_mul_ps(_mm256_sub_ps(ld(p.near_row[2]), oz), iz);
-    let tf_x = _mm256_mul_ps(_mm256_mul_ps(_mm256_sub_ps(ld(p.far_row[0]), ox), ix), s);
-    let tf_y = _mm256_mul_ps(_mm256_mul_ps(_mm256_sub_ps(ld(p.far_row[1]), oy), iy), s);
-    let tf_z = _mm256_mul_ps(_mm256_mul_ps(_mm256_sub_ps(ld(p.far_row[2]), oz), iz), s);
-    let tn = _mm256_max_ps(tn_x, _mm256_max_ps(tn_y, _mm256_max_ps(tn_z, _mm256_set1_ps(p.t_min))));
-    let tf = _mm256_min_ps(tf_x, _mm256_min_ps(tf_y, _mm256_min_ps(tf_z, _mm256_set1_ps(cull))));
-    let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
-    let mut near = [0.0f32; WIDTH];
-    // SAFETY: near has room for 8 floats; storeu has no alignment requirement.
-    unsafe { _mm256_storeu_ps(near.as_mut_ptr(), tn) };
-    (mask, near)
 }
