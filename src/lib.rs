@@ -6,6 +6,7 @@
 //! differential harness beside it.
 
 pub mod accel;
+pub mod bvh;
 pub mod camera;
 pub mod cli;
 pub mod error;
@@ -18,6 +19,7 @@ pub mod material;
 pub mod mesh;
 pub mod post;
 pub mod render;
+pub mod rng;
 pub mod sampler;
 pub mod scene;
 pub mod shading;

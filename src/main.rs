@@ -16,6 +16,10 @@ enum Command {
     Render(rtdiff::cli::render::RenderArgs),
     /// Trace one pixel and print every ray it causes (headless visual debugging).
     Debug(rtdiff::cli::debug::DebugArgs),
+    /// Print BVH statistics (nodes, leaves, levels, leaf sizes, SAH cost, memory, build time) per builder.
+    BvhStats(rtdiff::cli::bvh_stats::BvhStatsArgs),
+    /// Time BVH builds and traversals (and Embree, when built with it) on primary, incoherent and shadow rays.
+    Bench(rtdiff::cli::bench::BenchArgs),
 }
 
 fn main() {
@@ -23,6 +27,8 @@ fn main() {
     let result = match &cli.command {
         Command::Render(a) => rtdiff::cli::render::run(a),
         Command::Debug(a) => rtdiff::cli::debug::run(a),
+        Command::BvhStats(a) => rtdiff::cli::bvh_stats::run(a),
+        Command::Bench(a) => rtdiff::cli::bench::run(a),
     };
     if let Err(e) = result {
         eprintln!("rtdiff: error: {e}");
