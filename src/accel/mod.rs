@@ -32,8 +32,7 @@ pub trait Tracer: Send + Sync {
 pub fn build_tracer(prims: Arc<Primitives>, cfg: &AccelConfig) -> Result<Box<dyn Tracer>> {
     match cfg.backend {
         Backend::Brute => Ok(Box::new(BruteForce::new(prims, cfg.triangle_test))),
-        // Replaced by the BVH when it lands (issue 3).
-        Backend::Native => Ok(Box::new(BruteForce::new(prims, cfg.triangle_test))),
+        Backend::Native => Ok(Box::new(crate::bvh::BvhTracer::new(&prims, cfg))),
         #[cfg(feature = "embree")]
         Backend::Embree => Ok(Box::new(crate::embree::EmbreeTracer::new(prims, cfg.embree_quality)?)),
         #[cfg(not(feature = "embree"))]

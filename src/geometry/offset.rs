@@ -32,10 +32,21 @@ pub enum SpawnOffset {
 }
 
 /// Error bound of a point on a triangle computed as `b0 p0 + b1 p1 + b2 p2`
-/// (pbrt-v4, eq. 6.34): `gamma(7) (|b0 p0| + |b1 p1| + |b2 p2|)`.
+/// (pbrt-v4, eq. 6.34): `gamma(7) (|b0 p0| + |b1 p1| + |b2 p2|)`, floored on
+/// every axis at `gamma(7)` times the largest vertex coordinate.
+///
+/// The floor matters where pbrt's bound is zero: a triangle lying in a
+/// coordinate plane (all vertices with `x = 0`) computes `x = 0` exactly, so
+/// the offset along its normal would vanish and a ray leaving it would meet
+/// the triangle again at `t = +-0`, which the closed interval `[0, t_max]`
+/// (Embree's convention) accepts; pbrt avoids it only by rejecting `t` below a
+/// bound in its triangle test. The ray/triangle distance is computed from
+/// vertex coordinates of this magnitude, so an offset of this size puts the
+/// origin clearly behind the surface's rounding.
 #[inline]
 pub fn triangle_point_error(b: [f32; 3], p: [Vec3; 3]) -> Vec3 {
-    gamma(7) * ((b[0] * p[0]).abs() + (b[1] * p[1]).abs() + (b[2] * p[2]).abs())
+    let scale = p[0].abs().max(p[1].abs()).max(p[2].abs()).max_element();
+    (gamma(7) * ((b[0] * p[0]).abs() + (b[1] * p[1]).abs() + (b[2] * p[2]).abs())).max(Vec3::splat(gamma(7) * scale))
 }
 
 /// Error bound of a point reprojected onto a sphere surface (pbrt-v4, eq. 6.29).
@@ -65,17 +76,22 @@ pub fn next_down(v: f32) -> f32 {
 /// on the side of the geometric normal `n` that `w` points to.
 #[inline]
 pub fn offset_origin(p: Vec3, p_err: Vec3, n: Vec3, w: Vec3) -> Vec3 {
-    let n = n.normalize_or_zero();
-    let d = n.abs().dot(p_err);
-    let mut offset = d * n;
+    let mut n = n.normalize_or_zero();
     if w.dot(n) < 0.0 {
-        offset = -offset;
+        n = -n;
     }
-    let mut po = p + offset;
+    // pbrt-v4's offset: the error bound projected on the normal (the bound is
+    // floored at the vertex scale, see `triangle_point_error`, so it never vanishes).
+    let d = n.abs().dot(p_err);
+    let mut po = p + d * n;
+    // Round away from the surface in every component the normal moves. Unlike
+    // pbrt-v4 this also steps one ulp when the error bound is zero (a point
+    // exactly on an axis-aligned plane), because rays here accept t = t_min = 0
+    // (Embree's closed interval) where pbrt rejects t <= 0.
     for i in 0..3 {
-        if offset[i] > 0.0 {
+        if n[i] > 0.0 {
             po[i] = next_up(po[i]);
-        } else if offset[i] < 0.0 {
+        } else if n[i] < 0.0 {
             po[i] = next_down(po[i]);
         }
     }
@@ -113,5 +129,9 @@ mod tests {
         let down = offset_origin(p, e, n, Vec3::new(0.1, -1.0, 0.0));
         assert!(up.y > p.y && down.y < p.y);
         assert!(up.y - p.y >= e.y);
+        // Zero error bound (point exactly on the plane y = 0): still leaves the plane.
+        let q = Vec3::new(0.5, 0.0, 0.25);
+        assert!(offset_origin(q, Vec3::ZERO, n, Vec3::Y).y > 0.0);
+        assert!(offset_origin(q, Vec3::ZERO, n, -Vec3::Y).y < 0.0);
     }
 }

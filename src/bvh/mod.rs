@@ -1,0 +1,136 @@
+//! rtdiff's own bounding volume hierarchy.
+//!
+//! Builders ([`build_median`], [`build_sah_volume`], [`build_sah`]) share one
+//! framework ([`build`]) and produce a flattened binary BVH ([`BinaryBvh`]:
+//! 32-byte [`Node`]s and a reordered primitive array [`LeafPrims`]).
+//! Traversals are separate: the reports' [`traverse_basic`],
+//! [`traverse_priority_queue`], [`traverse_sorted_vector`] and
+//! [`traverse_nth_element`] walk the binary nodes; the production `fast`
+//! traversal collapses them into 8-wide SIMD nodes ([`wide`]).
+//!
+//! Every traversal returns exactly the brute-force closest hit: the same
+//! primitive tests on the same data, boxes culled conservatively, and the
+//! same tie rule (lowest primitive id among hits at equal distance).
+
+pub mod build;
+pub mod build_median;
+pub mod build_sah;
+pub mod build_sah_volume;
+pub mod node;
+pub mod prims;
+pub mod rays;
+pub mod slab;
+pub mod stats;
+pub mod traverse_basic;
+pub mod traverse_nth_element;
+pub mod traverse_ordered;
+pub mod traverse_priority_queue;
+pub mod traverse_sorted_vector;
+pub mod wide;
+
+pub use build::BinaryBvh;
+pub use node::Node;
+pub use prims::LeafPrims;
+pub use stats::BvhStats;
+pub use wide::WideBvh;
+
+use crate::accel::{AccelConfig, Builder, Tracer, Traversal};
+use crate::geometry::{Hit, Primitives, Ray, TriangleTest};
+
+/// Build a binary BVH over `prims` with the builder and parameters of `cfg`
+/// (`leaf_size` for `median`, `bins` for `sah`).
+pub fn build_binary(prims: &Primitives, cfg: &AccelConfig) -> BinaryBvh {
+    match cfg.builder {
+        Builder::Median => build_median::build(prims, cfg.leaf_size),
+        Builder::SahVolume => build_sah_volume::build(prims),
+        Builder::Sah => build_sah::build(prims, cfg.bins),
+    }
+}
+
+/// Build the binary BVH `cfg` asks for and its 8-wide collapse, and gather
+/// their statistics (`build_ms` covers the binary build plus the collapse).
+pub fn stats_for(prims: &Primitives, cfg: &AccelConfig) -> BvhStats {
+    let bin = build_binary(prims, cfg);
+    let mut stats = BvhStats::of(&bin, None);
+    let start = std::time::Instant::now();
+    let wide = WideBvh::from_binary(bin);
+    stats.build_ms += start.elapsed().as_secs_f64() * 1e3;
+    stats.wide_nodes = wide.nodes.len();
+    stats.wide_bytes = wide.bytes();
+    stats
+}
+
+/// The tree a [`BvhTracer`] walks.
+enum Tree {
+    Binary(BinaryBvh),
+    Wide(WideBvh),
+}
+
+/// A [`Tracer`] over rtdiff's BVH with a chosen builder and traversal.
+pub struct BvhTracer {
+    tree: Tree,
+    builder: Builder,
+    traversal: Traversal,
+    test: TriangleTest,
+}
+
+impl BvhTracer {
+    /// Build the BVH `cfg` asks for (the `fast` traversal also collapses it to 8-wide nodes).
+    pub fn new(prims: &Primitives, cfg: &AccelConfig) -> Self {
+        let bin = build_binary(prims, cfg);
+        let tree =
+            if cfg.traversal == Traversal::Fast { Tree::Wide(WideBvh::from_binary(bin)) } else { Tree::Binary(bin) };
+        Self { tree, builder: cfg.builder, traversal: cfg.traversal, test: cfg.triangle_test }
+    }
+
+    /// Use the portable scalar box test in the `fast` traversal even when AVX2 is available.
+    pub fn force_scalar(&mut self) {
+        if let Tree::Wide(w) = &mut self.tree {
+            w.set_scalar();
+        }
+    }
+}
+
+fn kebab<T: clap::ValueEnum>(v: &T) -> String {
+    v.to_possible_value().map_or_else(String::new, |p| p.get_name().to_string())
+}
+
+impl Tracer for BvhTracer {
+    fn name(&self) -> String {
+        format!("bvh-{}/{}", kebab(&self.builder), kebab(&self.traversal))
+    }
+
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let t = self.test;
+        match &self.tree {
+            Tree::Wide(w) => w.intersect(ray, t),
+            Tree::Binary(b) => match self.traversal {
+                Traversal::Basic | Traversal::Fast => traverse_basic::intersect(b, ray, t),
+                Traversal::PriorityQueue => {
+                    traverse_ordered::intersect::<traverse_priority_queue::HeapFrontier>(b, ray, t)
+                }
+                Traversal::SortedVector => {
+                    traverse_ordered::intersect::<traverse_sorted_vector::SortedFrontier>(b, ray, t)
+                }
+                Traversal::NthElement => traverse_ordered::intersect::<traverse_nth_element::NthFrontier>(b, ray, t),
+            },
+        }
+    }
+
+    fn occluded(&self, ray: &Ray) -> bool {
+        let t = self.test;
+        match &self.tree {
+            Tree::Wide(w) => w.occluded(ray, t),
+            Tree::Binary(b) => match self.traversal {
+                Traversal::Basic | Traversal::Fast => traverse_basic::occluded(b, ray, t),
+                Traversal::PriorityQueue => {
+                    traverse_ordered::occluded::<traverse_priority_queue::HeapFrontier>(b, ray, t)
+                }
+                Traversal::SortedVector => {
+                    traverse_ordered::occluded::<traverse_sorted_vector::SortedFrontier>(b, ray, t)
+                }
+                Traversal::NthElement => traverse_ordered::occluded::<traverse_nth_element::NthFrontier>(b, ray, t),
+            },
+        }
+    }
+}

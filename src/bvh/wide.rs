@@ -1,0 +1,404 @@
+//! The production path (`fast` traversal): the binary BVH collapsed into
+//! 8-wide nodes whose eight child boxes are tested at once (AVX2 when the CPU
+//! has it, detected at run time, with a portable scalar fallback of identical
+//! semantics), nearest-first order, early termination against the closest hit
+//! so far, a precomputed reciprocal direction, and an any-hit variant for
+//! shadow rays.
+
+use std::mem::MaybeUninit;
+
+use glam::Vec3;
+
+use crate::geometry::triangle::WatertightRay;
+use crate::geometry::{Hit, Ray, TriangleTest};
+
+use super::slab::{cull_bound, far_scale};
+use super::{BinaryBvh, LeafPrims, Node};
+
+/// Children per wide node.
+pub const WIDTH: usize = 8;
+
+/// Traversal stack entries: at most `WIDTH - 1` pending siblings per level and
+/// at most 100 levels (every builder caps the binary depth, and collapsing
+/// never deepens the tree).
+const STACK: usize = 1024;
+
+/// An 8-wide node: child boxes in structure-of-arrays form for SIMD tests.
+///
+/// 256 bytes (32 per child). Lane `i` is empty when `child[i] == u32::MAX`
+/// (its box is inverted, `min = +inf`, `max = -inf`, so no ray hits it), an
+/// inner node `child[i]` when `count[i] == 0`, or a leaf over the reordered
+/// primitives `child[i] .. child[i] + count[i]`.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub struct WideNode {
+    /// Rows 0..3: per-lane `min.x, min.y, min.z`; rows 3..6: `max.x, max.y, max.z`.
+    pub b: [[f32; WIDTH]; 6],
+    /// Child node index or first primitive.
+    pub child: [u32; WIDTH],
+    /// Primitive count of a leaf lane, 0 for inner-node and empty lanes.
+    pub count: [u32; WIDTH],
+}
+
+const _: () = assert!(std::mem::size_of::<WideNode>() == 256);
+
+impl WideNode {
+    const EMPTY: WideNode = WideNode {
+        b: [
+            [f32::INFINITY; WIDTH],
+            [f32::INFINITY; WIDTH],
+            [f32::INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+        ],
+        child: [u32::MAX; WIDTH],
+        count: [0; WIDTH],
+    };
+
+    fn set_lane(&mut self, lane: usize, n: &Node, child: u32, count: u32) {
+        for a in 0..3 {
+            self.b[a][lane] = n.min[a];
+            self.b[3 + a][lane] = n.max[a];
+        }
+        self.child[lane] = child;
+        self.count[lane] = count;
+    }
+
+    /// Number of used lanes.
+    pub fn used(&self) -> usize {
+        self.child.iter().filter(|&&c| c != u32::MAX).count()
+    }
+}
+
+/// A ray prepared for 8-wide box tests.
+#[derive(Clone, Copy)]
+struct WidePre {
+    o: Vec3,
+    inv: Vec3,
+    /// Row of `WideNode::b` holding the near plane of each axis.
+    near_row: [usize; 3],
+    /// Row holding the far plane.
+    far_row: [usize; 3],
+    t_min: f32,
+}
+
+impl WidePre {
+    #[inline(always)]
+    fn new(ray: &Ray) -> Self {
+        let inv = ray.dir.recip();
+        let neg = [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0];
+        Self {
+            o: ray.origin,
+            inv,
+            near_row: [0, 1, 2].map(|a| a + 3 * neg[a] as usize),
+            far_row: [0, 1, 2].map(|a| a + 3 * (!neg[a]) as usize),
+            t_min: ray.t_min,
+        }
+    }
+}
+
+/// Scalar 8-lane box test: hit mask and entry distances (same arithmetic as
+/// [`super::slab::RayPre::hit`]).
+#[inline(always)]
+fn box8_scalar(n: &WideNode, p: &WidePre, cull: f32) -> (u32, [f32; WIDTH]) {
+    let s = far_scale();
+    let mut mask = 0;
+    let mut near = [0.0; WIDTH];
+    for l in 0..WIDTH {
+        let tn_x = (n.b[p.near_row[0]][l] - p.o.x) * p.inv.x;
+        let tn_y = (n.b[p.near_row[1]][l] - p.o.y) * p.inv.y;
+        let tn_z = (n.b[p.near_row[2]][l] - p.o.z) * p.inv.z;
+        let tf_x = (n.b[p.far_row[0]][l] - p.o.x) * p.inv.x * s;
+        let tf_y = (n.b[p.far_row[1]][l] - p.o.y) * p.inv.y * s;
+        let tf_z = (n.b[p.far_row[2]][l] - p.o.z) * p.inv.z * s;
+        let tn = tn_x.max(tn_y).max(tn_z).max(p.t_min);
+        let tf = tf_x.min(tf_y).min(tf_z).min(cull);
+        near[l] = tn;
+        mask |= u32::from(tn <= tf) << l;
+    }
+    (mask, near)
+}
+
+/// AVX2 8-lane box test, expanded inside the AVX2 traversal functions (a
+/// macro rather than a function so it is always inlined into them).
+/// `_mm256_max_ps`/`_mm256_min_ps` return their second operand when either is
+/// NaN, so the possibly-NaN slab distance always goes first: a NaN slab
+/// (origin on the plane, ray parallel) imposes nothing, exactly like
+/// `f32::max`/`f32::min` in [`box8_scalar`].
+#[cfg(target_arch = "x86_64")]
+macro_rules! box8_avx2 {
+    ($n:expr, $p:expr, $cull:expr) => {{
+        use std::arch::x86_64::*;
+        let (n, p): (&WideNode, &WidePre) = ($n, $p);
+        let ox = _mm256_set1_ps(p.o.x);
+        let oy = _mm256_set1_ps(p.o.y);
+        let oz = _mm256_set1_ps(p.o.z);
+        let ix = _mm256_set1_ps(p.inv.x);
+        let iy = _mm256_set1_ps(p.inv.y);
+        let iz = _mm256_set1_ps(p.inv.z);
+        let s = _mm256_set1_ps(far_scale());
+        // SAFETY: each row is 32 bytes inside a 64-byte aligned node, so aligned loads are valid.
+        let ld = |row: usize| unsafe { _mm256_load_ps(n.b[row].as_ptr()) };
+        let tn_x = _mm256_mul_ps(_mm256_sub_ps(ld(p.near_row[0]), ox), ix);
+        let tn_y = _mm256_mul_ps(_mm256_sub_ps(ld(p.near_row[1]), oy), iy);
+        let tn_z = _mm256_mul_ps(_mm256_sub_ps(ld(p.near_row[2]), oz), iz);
+        let tf_x = _mm256_mul_ps(_mm256_mul_ps(_mm256_sub_ps(ld(p.far_row[0]), ox), ix), s);
+        let tf_y = _mm256_mul_ps(_mm256_mul_ps(_mm256_sub_ps(ld(p.far_row[1]), oy), iy), s);
+        let tf_z = _mm256_mul_ps(_mm256_mul_ps(_mm256_sub_ps(ld(p.far_row[2]), oz), iz), s);
+        let tn = _mm256_max_ps(tn_x, _mm256_max_ps(tn_y, _mm256_max_ps(tn_z, _mm256_set1_ps(p.t_min))));
+        let tf = _mm256_min_ps(tf_x, _mm256_min_ps(tf_y, _mm256_min_ps(tf_z, _mm256_set1_ps($cull))));
+        let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
+        let mut near = [0.0f32; WIDTH];
+        // SAFETY: near has room for 8 floats; storeu has no alignment requirement.
+        unsafe { _mm256_storeu_ps(near.as_mut_ptr(), tn) };
+        (mask, near)
+    }};
+}
+
+/// [`box8_scalar`] in the calling convention of the box-test macros.
+macro_rules! box8_portable {
+    ($n:expr, $p:expr, $cull:expr) => {
+        box8_scalar($n, $p, $cull)
+    };
+}
+
+/// A pending child: entry distance, node or first primitive, primitive count (0 = inner node).
+#[derive(Clone, Copy)]
+struct Entry {
+    t: f32,
+    child: u32,
+    count: u32,
+}
+
+/// Nearest-first closest-hit traversal, generic over the box test.
+macro_rules! closest {
+    ($self:ident, $ray:ident, $test:ident, $box8:ident) => {{
+        let pre = WidePre::new($ray);
+        let wr = WatertightRay::new($ray.dir);
+        let mut r = *$ray;
+        let mut best: Option<Hit> = None;
+        let mut cull = cull_bound(r.t_max);
+        let mut stack = [MaybeUninit::<Entry>::uninit(); STACK];
+        let mut sp = 0usize;
+        let mut cur = Entry { t: r.t_min, child: 0, count: 0 };
+        'outer: loop {
+            if cur.count == 0 {
+                let node = &$self.nodes[cur.child as usize];
+                let (mut mask, near) = $box8!(node, &pre, cull);
+                if mask != 0 {
+                    let first = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if mask == 0 {
+                        cur = Entry { t: near[first], child: node.child[first], count: node.count[first] };
+                        continue 'outer;
+                    }
+                    // Sort the hit lanes by entry distance (insertion sort, at most 8).
+                    let mut lanes = [(0.0f32, 0usize); WIDTH];
+                    lanes[0] = (near[first], first);
+                    let mut k = 1;
+                    while mask != 0 {
+                        let l = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        let mut j = k;
+                        while j > 0 && lanes[j - 1].0 > near[l] {
+                            lanes[j] = lanes[j - 1];
+                            j -= 1;
+                        }
+                        lanes[j] = (near[l], l);
+                        k += 1;
+                    }
+                    for &(t, l) in lanes[1..k].iter().rev() {
+                        stack[sp] = MaybeUninit::new(Entry { t, child: node.child[l], count: node.count[l] });
+                        sp += 1;
+                    }
+                    let (t, l) = lanes[0];
+                    cur = Entry { t, child: node.child[l], count: node.count[l] };
+                    continue 'outer;
+                }
+            } else if $self.prims.intersect_leaf(cur.child, cur.count, &mut r, &wr, $test, &mut best) {
+                cull = cull_bound(r.t_max);
+            }
+            loop {
+                if sp == 0 {
+                    break 'outer;
+                }
+                sp -= 1;
+                // SAFETY: entries below sp were written before.
+                let e = unsafe { stack[sp].assume_init() };
+                if e.t <= cull {
+                    cur = e;
+                    break;
+                }
+            }
+        }
+        best
+    }};
+}
+
+/// Any-hit traversal, generic over the box test (no ordering needed).
+macro_rules! any_hit {
+    ($self:ident, $ray:ident, $test:ident, $box8:ident) => {{
+        let pre = WidePre::new($ray);
+        let wr = WatertightRay::new($ray.dir);
+        let cull = cull_bound($ray.t_max);
+        let mut stack = [MaybeUninit::<(u32, u32)>::uninit(); STACK];
+        stack[0] = MaybeUninit::new((0, 0));
+        let mut sp = 1usize;
+        while sp > 0 {
+            sp -= 1;
+            // SAFETY: entries below sp were written before.
+            let (child, count) = unsafe { stack[sp].assume_init() };
+            if count > 0 {
+                if $self.prims.occluded_leaf(child, count, $ray, &wr, $test) {
+                    return true;
+                }
+                continue;
+            }
+            let node = &$self.nodes[child as usize];
+            let (mut mask, _) = $box8!(node, &pre, cull);
+            while mask != 0 {
+                let l = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                stack[sp] = MaybeUninit::new((node.child[l], node.count[l]));
+                sp += 1;
+            }
+        }
+        false
+    }};
+}
+
+/// A wide BVH sharing the reordered primitives of the binary BVH it came from.
+#[derive(Clone, Debug)]
+pub struct WideBvh {
+    /// Nodes; node 0 is the root. Empty when there are no primitives.
+    pub nodes: Vec<WideNode>,
+    /// Primitives in leaf order (moved from the binary BVH).
+    pub prims: LeafPrims,
+    use_avx2: bool,
+}
+
+impl WideBvh {
+    /// Collapse `bvh` into 8-wide nodes: each wide node takes a binary node's
+    /// children and repeatedly opens the inner child of largest surface area
+    /// until it has eight children or only leaves.
+    pub fn from_binary(bvh: BinaryBvh) -> Self {
+        let mut nodes = Vec::with_capacity(bvh.nodes.len() / 4 + 1);
+        if !bvh.nodes.is_empty() {
+            collapse(&bvh.nodes, 0, &mut nodes);
+        }
+        Self { nodes, prims: bvh.prims, use_avx2: avx2_available() }
+    }
+
+    /// Force the portable scalar box test (for testing it on AVX2 machines).
+    pub fn set_scalar(&mut self) {
+        self.use_avx2 = false;
+    }
+
+    /// True when the AVX2 path is used.
+    pub fn uses_avx2(&self) -> bool {
+        self.use_avx2
+    }
+
+    /// Memory held by nodes and primitives, in bytes.
+    pub fn bytes(&self) -> usize {
+        self.nodes.len() * std::mem::size_of::<WideNode>() + self.prims.bytes()
+    }
+
+    /// Closest hit (ties: lowest primitive id).
+    pub fn intersect(&self, ray: &Ray, test: TriangleTest) -> Option<Hit> {
+        if self.nodes.is_empty() {
+            return None;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if self.use_avx2 {
+            // SAFETY: use_avx2 is only set when the CPU reports AVX2.
+            return unsafe { self.intersect_avx2(ray, test) };
+        }
+        self.intersect_scalar(ray, test)
+    }
+
+    /// True when anything is hit within the ray's interval.
+    pub fn occluded(&self, ray: &Ray, test: TriangleTest) -> bool {
+        if self.nodes.is_empty() {
+            return false;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if self.use_avx2 {
+            // SAFETY: use_avx2 is only set when the CPU reports AVX2.
+            return unsafe { self.occluded_avx2(ray, test) };
+        }
+        self.occluded_scalar(ray, test)
+    }
+
+    fn intersect_scalar(&self, ray: &Ray, test: TriangleTest) -> Option<Hit> {
+        closest!(self, ray, test, box8_portable)
+    }
+
+    fn occluded_scalar(&self, ray: &Ray, test: TriangleTest) -> bool {
+        any_hit!(self, ray, test, box8_portable)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn intersect_avx2(&self, ray: &Ray, test: TriangleTest) -> Option<Hit> {
+        closest!(self, ray, test, box8_avx2)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn occluded_avx2(&self, ray: &Ray, test: TriangleTest) -> bool {
+        any_hit!(self, ray, test, box8_avx2)
+    }
+}
+
+fn avx2_available() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+fn collapse(bin: &[Node], i: usize, out: &mut Vec<WideNode>) -> u32 {
+    let me = out.len();
+    out.push(WideNode::EMPTY);
+    // (binary node, surface area; negative for leaves, which are never opened)
+    let area = |k: usize| if bin[k].is_leaf() { -1.0 } else { bin[k].bounds().surface_area() };
+    let mut kids = [(0usize, 0.0f32); WIDTH];
+    let mut len = if bin[i].is_leaf() {
+        kids[0] = (i, -1.0);
+        1
+    } else {
+        let (l, r) = (i + 1, bin[i].offset as usize);
+        kids[0] = (l, area(l));
+        kids[1] = (r, area(r));
+        2
+    };
+    while len < WIDTH {
+        let (j, &(k, a)) =
+            kids[..len].iter().enumerate().max_by(|x, y| x.1.1.total_cmp(&y.1.1)).unwrap_or((0, &(0, -1.0)));
+        if a < 0.0 {
+            break; // only leaves left
+        }
+        let (l, r) = (k + 1, bin[k].offset as usize);
+        kids[j] = (l, area(l));
+        kids[len] = (r, area(r));
+        len += 1;
+    }
+    let mut node = WideNode::EMPTY;
+    for (lane, &(k, _)) in kids[..len].iter().enumerate() {
+        let n = &bin[k];
+        if n.is_leaf() {
+            node.set_lane(lane, n, n.offset, n.count);
+        } else {
+            let c = collapse(bin, k, out);
+            node.set_lane(lane, n, c, 0);
+        }
+    }
+    out[me] = node;
+    me as u32
+}

@@ -1,0 +1,115 @@
+//! `rtdiff bvh-stats SCENE [--builder ...] [--json]`: build the BVH with each
+//! builder and print its statistics.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use crate::accel::{AccelConfig, Builder, Traversal};
+use crate::bvh::BvhStats;
+use crate::error::{Error, Result};
+use crate::geometry::Primitives;
+
+/// Arguments of `rtdiff bvh-stats`.
+#[derive(clap::Args, Debug)]
+pub struct BvhStatsArgs {
+    /// Scene: a Wavefront OBJ mesh or a scene JSON file.
+    pub scene: PathBuf,
+    /// Builders to report (all when none is given).
+    #[arg(long, value_enum)]
+    pub builder: Vec<Builder>,
+    /// Primitives per leaf for the median builder.
+    #[arg(long, default_value_t = 1)]
+    pub leaf_size: usize,
+    /// Bins per axis for the sah builder.
+    #[arg(long, default_value_t = 16)]
+    pub bins: usize,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Load the primitives of `path`: an `.obj` mesh directly, anything else as a scene file.
+/// With `normalize`, an OBJ mesh is centred on its vertex mean and scaled into the unit sphere.
+pub fn load_primitives(path: &Path, normalize: bool) -> Result<Arc<Primitives>> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("obj") => {
+            let mut mesh = crate::mesh::load_obj(path)?;
+            if normalize {
+                crate::bvh::rays::normalize_mesh(&mut mesh);
+            }
+            if mesh.indices.is_empty() {
+                return Err(Error::file(path, "the mesh has no (non-degenerate) triangles"));
+            }
+            Ok(Arc::new(mesh.to_primitives()))
+        }
+        _ => load_scene_primitives(path),
+    }
+}
+
+fn load_scene_primitives(path: &Path) -> Result<Arc<Primitives>> {
+    Err(Error::file(path, "expected a Wavefront .obj mesh (scene files need the scene module)"))
+}
+
+/// Run `rtdiff bvh-stats`.
+pub fn run(args: &BvhStatsArgs) -> Result<()> {
+    if args.bins < 2 {
+        return Err(Error::Invalid(format!("--bins must be at least 2 (got {})", args.bins)));
+    }
+    let prims = load_primitives(&args.scene, false)?;
+    let builders = if args.builder.is_empty() {
+        vec![Builder::Median, Builder::SahVolume, Builder::Sah]
+    } else {
+        args.builder.clone()
+    };
+    let stats: Vec<BvhStats> = builders
+        .iter()
+        .map(|&builder| {
+            let cfg = AccelConfig {
+                builder,
+                traversal: Traversal::Fast,
+                leaf_size: args.leaf_size,
+                bins: args.bins,
+                ..Default::default()
+            };
+            crate::bvh::stats_for(&prims, &cfg)
+        })
+        .collect();
+    if args.json {
+        let s = serde_json::to_string_pretty(&stats).map_err(|e| Error::Invalid(e.to_string()))?;
+        println!("{s}");
+        return Ok(());
+    }
+    println!("{} ({} primitives)", args.scene.display(), prims.len());
+    println!(
+        "{:<11} {:>9} {:>9} {:>6} {:>9} {:>10} {:>9} {:>10} {:>10} {:>11} {:>9}",
+        "builder",
+        "nodes",
+        "leaves",
+        "levels",
+        "max/leaf",
+        "mean/leaf",
+        "SAH cost",
+        "bytes",
+        "wide nodes",
+        "wide bytes",
+        "build ms"
+    );
+    for s in &stats {
+        println!(
+            "{:<11} {:>9} {:>9} {:>6} {:>9} {:>10.2} {:>9.2} {:>10} {:>10} {:>11} {:>9.2}",
+            s.builder,
+            s.nodes,
+            s.leaves,
+            s.levels,
+            s.max_prims_per_leaf,
+            s.mean_prims_per_leaf,
+            s.sah_cost,
+            s.bytes,
+            s.wide_nodes,
+            s.wide_bytes,
+            s.build_ms
+        );
+    }
+    Ok(())
+}
