@@ -35,7 +35,7 @@ pub enum RaysArg {
 /// Arguments of `rtdiff parity`.
 #[derive(clap::Args, Debug)]
 pub struct ParityArgs {
-    /// Scene: a Wavefront .obj mesh (normalised to the unit sphere).
+    /// Scene: a scene .json file, or a Wavefront .obj mesh (normalised to the unit sphere).
     pub scene: PathBuf,
     /// Ray set to run (`all` adds the numerical stress report).
     #[arg(long, value_enum, default_value = "all")]

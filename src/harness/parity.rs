@@ -182,7 +182,8 @@ pub struct VariantStats {
     pub leaks: u64,
     /// Rays spawned from a surface that hit their own primitive again.
     pub self_hits: u64,
-    /// Largest relative distance error `|t - t_ref| / t_ref` over rays hitting at equal distance.
+    /// Largest relative distance error `|t - t_ref| / max(t_ref, t bound)` over
+    /// rays hitting at equal distance (within the bound).
     pub dist_rel_max: f64,
     /// 99.9th percentile of the same.
     pub dist_rel_p999: f64,
@@ -466,7 +467,9 @@ fn compare(
                 if a.prim != b.prim {
                     s.prim_ties += 1;
                 }
-                let r = dt / (b.t as f64).abs().max(f64::MIN_POSITIVE);
+                // Relative to the distance, or to its error bound for hits closer
+                // than that bound (at the origin a relative error means nothing).
+                let r = dt / (b.t as f64).abs().max(tb).max(f64::MIN_POSITIVE);
                 rel.push(r);
                 s.dist_rel_max = s.dist_rel_max.max(r);
                 s.dist_bound_ratio_max = s.dist_bound_ratio_max.max(dt / tb);
