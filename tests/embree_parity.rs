@@ -15,15 +15,14 @@
 //! - no false self-intersection of rays leaving a surface, at any scale.
 //!
 //! The meshes come from `assets/` (scripts/fetch-assets.sh, or a copy of
-//! /work/shared/assets); the Cornell-like box is built here.
+//! /work/shared/assets); the Cornell box is `scenes/cornell_box.json`.
 #![cfg(feature = "embree")]
 
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use glam::Vec3;
 use rtdiff::accel::{AccelConfig, Backend, build_tracer};
-use rtdiff::geometry::{Primitives, Triangle, TriangleTest};
+use rtdiff::geometry::{Primitives, TriangleTest};
 use rtdiff::harness::parity::{self, ParityOptions, ParityReport, Reference};
 use rtdiff::harness::raysets::{RayContext, SetKind};
 
@@ -53,43 +52,12 @@ fn asset(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets").join(name)
 }
 
-/// A Cornell-like box, normalised to the unit sphere: an open-front room
-/// (floor, ceiling, back, left, right walls), a short and a tall block (no
-/// bottoms) and a light quad just below the ceiling: 32 triangles.
-fn cornell_box() -> Arc<Primitives> {
-    let mut tris = Vec::new();
-    let mut quad = |a: Vec3, b: Vec3, c: Vec3, d: Vec3| {
-        tris.push(Triangle { v: [a, b, c] });
-        tris.push(Triangle { v: [a, c, d] });
-    };
-    let v = |x: f32, y: f32, z: f32| Vec3::new(x, y, z) / 555.0 - Vec3::splat(0.5);
-    let (l, h) = (0.0, 555.0);
-    quad(v(l, l, l), v(h, l, l), v(h, l, h), v(l, l, h)); // floor
-    quad(v(l, h, l), v(l, h, h), v(h, h, h), v(h, h, l)); // ceiling
-    quad(v(l, l, h), v(h, l, h), v(h, h, h), v(l, h, h)); // back
-    quad(v(l, l, l), v(l, l, h), v(l, h, h), v(l, h, l)); // left
-    quad(v(h, l, l), v(h, h, l), v(h, h, h), v(h, l, h)); // right
-    quad(v(213.0, 554.0, 227.0), v(343.0, 554.0, 227.0), v(343.0, 554.0, 332.0), v(213.0, 554.0, 332.0)); // light
-    // Blocks: four sides and a top, given by their footprint corners and height.
-    let mut block = |c: [(f32, f32); 4], top: f32| {
-        for k in 0..4 {
-            let (a, b) = (c[k], c[(k + 1) % 4]);
-            quad(v(a.0, 0.0, a.1), v(a.0, top, a.1), v(b.0, top, b.1), v(b.0, 0.0, b.1));
-        }
-        quad(v(c[0].0, top, c[0].1), v(c[3].0, top, c[3].1), v(c[2].0, top, c[2].1), v(c[1].0, top, c[1].1));
-    };
-    block([(130.0, 65.0), (82.0, 225.0), (240.0, 272.0), (290.0, 114.0)], 165.0);
-    block([(423.0, 247.0), (265.0, 296.0), (314.0, 456.0), (472.0, 406.0)], 330.0);
-    let mut positions: Vec<Vec3> = tris.iter().flat_map(|t| t.v).collect();
-    parity::normalise_to_unit_sphere(&mut positions);
-    let triangles = positions.chunks_exact(3).map(|c| Triangle { v: [c[0], c[1], c[2]] }).collect::<Vec<_>>();
-    assert_eq!(triangles.len(), 32);
-    Arc::new(Primitives { triangles, spheres: Vec::new() })
+fn load(name: &str) -> RayContext {
+    load_path(&asset(name))
 }
 
-fn load(name: &str) -> RayContext {
-    let path = asset(name);
-    rtdiff::harness::load_context(&path).unwrap_or_else(|e| panic!("{e} (copy the meshes into assets/ first)"))
+fn load_path(path: &std::path::Path) -> RayContext {
+    rtdiff::harness::load_context(path).unwrap_or_else(|e| panic!("{e} (copy the meshes into assets/ first)"))
 }
 
 fn native_is_brute(prims: &Arc<Primitives>) -> bool {
@@ -172,7 +140,10 @@ fn run_mesh(mesh: &str, ctx: RayContext) {
 
 #[test]
 fn cornell_box_parity() {
-    run_mesh("cornell", RayContext::with_defaults(cornell_box()));
+    // The project's Cornell box scene (32 triangles), with its own camera and light.
+    let ctx = load_path(&PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_box.json"));
+    assert_eq!(ctx.prims.triangles.len(), 32);
+    run_mesh("cornell", ctx);
 }
 
 #[test]
