@@ -116,19 +116,23 @@ fn scene_bounds_match_the_primitives() {
 #[test]
 fn library_writes_inst_prim_id_at_byte_80() {
     let t = EmbreeTracer::new(one_triangle_and_sphere(), EmbreeQuality::High).unwrap();
-    let mut rh = ffi::RTCRayHit::default();
-    rh.ray = ffi::RTCRay {
-        org_x: 0.25,
-        org_y: 0.25,
-        org_z: 1.0,
-        dir_z: -1.0,
-        tfar: f32::INFINITY,
-        mask: u32::MAX,
-        ..Default::default()
+    let mut rh = ffi::RTCRayHit {
+        ray: ffi::RTCRay {
+            org_x: 0.25,
+            org_y: 0.25,
+            org_z: 1.0,
+            dir_z: -1.0,
+            tfar: f32::INFINITY,
+            mask: u32::MAX,
+            ..Default::default()
+        },
+        hit: ffi::RTCHit {
+            geomID: ffi::RTC_INVALID_GEOMETRY_ID,
+            instID: [0xDEAD_BEEF],
+            instPrimID: [0xDEAD_BEEF],
+            ..Default::default()
+        },
     };
-    rh.hit.geomID = ffi::RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID = [0xDEAD_BEEF];
-    rh.hit.instPrimID = [0xDEAD_BEEF];
     // SAFETY: committed scene, a 96-byte aligned RTCRayHit, default arguments.
     unsafe { ffi::rtcIntersect1(t.scene().raw(), &mut rh, std::ptr::null_mut()) };
     assert_eq!(rh.hit.geomID, 0);
