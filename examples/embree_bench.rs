@@ -63,5 +63,42 @@ fn main() -> rtdiff::Result<()> {
             median(to)
         );
     }
+    // Coherent primary rays in 4 x 2 pixel tiles: rtcIntersect1 per ray vs one
+    // rtcIntersect8 per tile (the only workload where packets can pay).
+    let (w, h) = ctx.image;
+    let mut tiles = Vec::new();
+    for ty in (0..h - 1).step_by(2) {
+        for tx in (0..w - 3).step_by(4) {
+            let tile: Vec<_> =
+                (0..8).map(|k| (ctx.camera)((tx + k % 4) as f32 + 0.5, (ty + k / 4) as f32 + 0.5)).collect();
+            tiles.push(tile);
+        }
+    }
+    let nrays = (tiles.len() * 8) as f64;
+    let (mut t1, mut t8, mut o1, mut o8) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..3 {
+        let t0 = Instant::now();
+        let a: usize = tiles.iter().flatten().filter(|r| tracer.intersect(r).is_some()).count();
+        t1.push(nrays / t0.elapsed().as_secs_f64() / 1e6);
+        let t0 = Instant::now();
+        let b: usize = tiles.iter().map(|t| tracer.intersect8(t).iter().flatten().count()).sum();
+        t8.push(nrays / t0.elapsed().as_secs_f64() / 1e6);
+        assert_eq!(a, b);
+        let t0 = Instant::now();
+        let a: usize = tiles.iter().flatten().filter(|r| tracer.occluded(r)).count();
+        o1.push(nrays / t0.elapsed().as_secs_f64() / 1e6);
+        let t0 = Instant::now();
+        let b: usize = tiles.iter().map(|t| tracer.occluded8(t).iter().filter(|&&o| o).count()).sum();
+        o8.push(nrays / t0.elapsed().as_secs_f64() / 1e6);
+        assert_eq!(a, b);
+    }
+    println!(
+        "coherent primary {} rays (4x2 tiles): rtcIntersect1 {:.2} vs rtcIntersect8 {:.2} Mrays/s; rtcOccluded1 {:.2} vs rtcOccluded8 {:.2} Mrays/s",
+        nrays,
+        median(t1),
+        median(t8),
+        median(o1),
+        median(o8)
+    );
     Ok(())
 }

@@ -140,3 +140,36 @@ fn library_writes_inst_prim_id_at_byte_80() {
     // Both were overwritten with RTC_INVALID_GEOMETRY_ID (no instance).
     assert_eq!((rh.hit.instID[0], rh.hit.instPrimID[0]), (u32::MAX, u32::MAX));
 }
+
+#[test]
+fn packet_layouts_and_answers_match_single_rays() {
+    assert_eq!((size_of::<ffi::RTCRay8>(), align_of::<ffi::RTCRay8>()), (384, 32));
+    assert_eq!((size_of::<ffi::RTCHit8>(), align_of::<ffi::RTCHit8>()), (288, 32));
+    assert_eq!((size_of::<ffi::RTCRayHit8>(), align_of::<ffi::RTCRayHit8>()), (672, 32));
+    let prims = one_triangle_and_sphere();
+    let t = EmbreeTracer::new(prims, EmbreeQuality::Medium).unwrap();
+    let mut rng = rtdiff::harness::raysets::Rng::new(5);
+    let bounds = rtdiff::geometry::Aabb::new(Vec3::new(-1.0, -1.0, -1.0), Vec3::new(7.0, 2.0, 2.0));
+    let rays: Vec<Ray> = (0..4003).map(|_| Ray::new(rng.in_box(&bounds), rng.unit_vector())).collect();
+    let mut hits = 0;
+    for chunk in rays.chunks(8) {
+        let h8 = t.intersect8(chunk);
+        let o8 = t.occluded8(chunk);
+        for (k, r) in chunk.iter().enumerate() {
+            // Same primitive; the packet kernels are different SIMD code
+            // (other FMA contractions), so t may differ by an ulp or two and
+            // the sphere's (u, v), computed from the hit point, accordingly.
+            let h1 = t.intersect(r);
+            assert_eq!(h8[k].map(|h| h.prim), h1.map(|h| h.prim), "ray {r:?}");
+            if let (Some(a), Some(b)) = (h8[k], h1) {
+                assert!((a.t - b.t).abs() <= 4.0 * f32::EPSILON * b.t, "{a:?} vs {b:?}");
+                assert!((a.u - b.u).abs() <= 1e-5 && (a.v - b.v).abs() <= 1e-5, "{a:?} vs {b:?}");
+            }
+            assert_eq!(o8[k], t.occluded(r));
+            hits += h8[k].is_some() as usize;
+        }
+        // Lanes past the slice stay empty.
+        assert!(h8[chunk.len()..].iter().all(Option::is_none) && !o8[chunk.len()..].iter().any(|&o| o));
+    }
+    assert!(hits > 100, "{hits}");
+}

@@ -99,6 +99,52 @@ pub struct RTCRayHit {
     pub hit: RTCHit,
 }
 
+/// `struct RTC_ALIGN(32) RTCRay8`: structure of arrays (384 bytes).
+#[repr(C, align(32))]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RTCRay8 {
+    pub org_x: [f32; 8],
+    pub org_y: [f32; 8],
+    pub org_z: [f32; 8],
+    pub tnear: [f32; 8],
+    pub dir_x: [f32; 8],
+    pub dir_y: [f32; 8],
+    pub dir_z: [f32; 8],
+    pub time: [f32; 8],
+    pub tfar: [f32; 8],
+    pub mask: [u32; 8],
+    pub id: [u32; 8],
+    pub flags: [u32; 8],
+}
+
+/// `struct RTC_ALIGN(32) RTCHit8` of a build with instance arrays (288 bytes).
+#[repr(C, align(32))]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RTCHit8 {
+    pub Ng_x: [f32; 8],
+    pub Ng_y: [f32; 8],
+    pub Ng_z: [f32; 8],
+    pub u: [f32; 8],
+    pub v: [f32; 8],
+    pub primID: [u32; 8],
+    pub geomID: [u32; 8],
+    pub instID: [[u32; 8]; RTC_MAX_INSTANCE_LEVEL_COUNT],
+    pub instPrimID: [[u32; 8]; RTC_MAX_INSTANCE_LEVEL_COUNT],
+}
+
+/// `struct RTCRayHit8` (672 bytes, 32-byte aligned).
+#[repr(C, align(32))]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RTCRayHit8 {
+    pub ray: RTCRay8,
+    pub hit: RTCHit8,
+}
+
+/// The `valid` mask of the 8-wide calls: -1 = active lane, 0 = inactive (32-byte aligned).
+#[repr(C, align(32))]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Valid8(pub [i32; 8]);
+
 /// `struct RTCBounds` (32 bytes, 16-byte aligned).
 #[repr(C, align(16))]
 #[derive(Clone, Copy, Debug, Default)]
@@ -124,6 +170,9 @@ const _: () = assert!(std::mem::size_of::<RTCRay>() == 48 && std::mem::align_of:
 const _: () = assert!(std::mem::size_of::<RTCHit>() == 36 && std::mem::align_of::<RTCHit>() == 4);
 const _: () = assert!(std::mem::size_of::<RTCRayHit>() == 96 && std::mem::align_of::<RTCRayHit>() == 16);
 const _: () = assert!(std::mem::size_of::<RTCBounds>() == 32);
+const _: () = assert!(std::mem::size_of::<RTCRay8>() == 384 && std::mem::align_of::<RTCRay8>() == 32);
+const _: () = assert!(std::mem::size_of::<RTCHit8>() == 288 && std::mem::align_of::<RTCHit8>() == 32);
+const _: () = assert!(std::mem::size_of::<RTCRayHit8>() == 672 && std::mem::align_of::<RTCRayHit8>() == 32);
 
 #[link(name = "embree4")]
 unsafe extern "C" {
@@ -158,4 +207,11 @@ unsafe extern "C" {
 
     pub fn rtcIntersect1(scene: RTCScene, rayhit: *mut RTCRayHit, args: RTCIntersectArgumentsPtr);
     pub fn rtcOccluded1(scene: RTCScene, ray: *mut RTCRay, args: RTCIntersectArgumentsPtr);
+    pub fn rtcIntersect8(
+        valid: *const Valid8,
+        scene: RTCScene,
+        rayhit: *mut RTCRayHit8,
+        args: RTCIntersectArgumentsPtr,
+    );
+    pub fn rtcOccluded8(valid: *const Valid8, scene: RTCScene, ray: *mut RTCRay8, args: RTCIntersectArgumentsPtr);
 }
