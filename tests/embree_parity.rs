@@ -19,10 +19,9 @@
 #![cfg(feature = "embree")]
 
 use std::path::PathBuf;
-use std::sync::Arc;
 
-use rtdiff::accel::{AccelConfig, Backend, build_tracer};
-use rtdiff::geometry::{Primitives, TriangleTest};
+use rtdiff::accel::{AccelConfig, Backend};
+use rtdiff::geometry::TriangleTest;
 use rtdiff::harness::parity::{self, ParityOptions, ParityReport, Reference};
 use rtdiff::harness::raysets::{RayContext, SetKind};
 
@@ -42,12 +41,6 @@ const COUNTS: [(SetKind, usize); 9] = [
 /// Rays per set for the sweep over every builder x traversal.
 const SWEEP_COUNT: usize = 10_000;
 
-/// Until the BVH lands, the native backend is the brute-force loop: its cost is
-/// rays x triangles, so the ray count is capped at this many triangle tests per
-/// mesh (all native variants are then the same tracer, so only one is run).
-/// With the BVH merged, the full counts above run.
-const BRUTE_BUDGET: f64 = 1.5e9;
-
 fn asset(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets").join(name)
 }
@@ -58,10 +51,6 @@ fn load(name: &str) -> RayContext {
 
 fn load_path(path: &std::path::Path) -> RayContext {
     rtdiff::harness::load_context(path).unwrap_or_else(|e| panic!("{e} (copy the meshes into assets/ first)"))
-}
-
-fn native_is_brute(prims: &Arc<Primitives>) -> bool {
-    build_tracer(prims.clone(), &AccelConfig::default()).unwrap().name() == "brute"
 }
 
 /// Check the requirements of the module documentation on one report.
@@ -96,45 +85,41 @@ fn check(mesh: &str, r: &ParityReport) {
 }
 
 fn run_mesh(mesh: &str, ctx: RayContext) {
-    let brute = native_is_brute(&ctx.prims);
-    let full: usize = COUNTS.iter().map(|c| c.1).sum();
-    let scale = if brute { (BRUTE_BUDGET / ctx.prims.len() as f64 / full as f64).min(1.0) } else { 1.0 };
     let mut total = 0;
     let start = std::time::Instant::now();
     for (kind, n) in COUNTS {
-        let count = ((n as f64 * scale) as usize).max(3000);
         let opts = ParityOptions {
             sets: vec![kind],
-            count,
+            count: n,
             seed: 2026,
             reference: Reference::Embree,
             variants: vec![AccelConfig::default()],
+            sweep_count: None,
             stress: false,
             max_examples: 5,
         };
         let r = parity::run(&ctx, &opts).unwrap();
         total += r.sets.iter().map(|s| s.rays).sum::<usize>();
         if kind == SetKind::Edges {
-            assert!(r.sets[0].crossing_rays > count / 4, "{mesh}: too few crossing rays to test leaks");
+            assert!(r.sets[0].crossing_rays > n / 4, "{mesh}: too few crossing rays to test leaks");
         }
         check(mesh, &r);
     }
-    if !brute {
-        assert!(total >= 1_000_000, "{mesh}: only {total} rays");
-        // Every builder x traversal on a smaller sample of every set.
-        let opts = ParityOptions {
-            sets: SetKind::ALL.to_vec(),
-            count: SWEEP_COUNT,
-            seed: 7,
-            variants: parity::native_variants(),
-            ..Default::default()
-        };
-        check(mesh, &parity::run(&ctx, &opts).unwrap());
-    }
+    assert!(total >= 1_000_000, "{mesh}: only {total} rays");
+    // Every builder x traversal on a smaller sample of every set.
+    let opts = ParityOptions {
+        sets: SetKind::ALL.to_vec(),
+        count: SWEEP_COUNT,
+        seed: 7,
+        variants: parity::native_variants(),
+        ..Default::default()
+    };
+    let r = parity::run(&ctx, &opts).unwrap();
+    assert_eq!(r.sets[0].variants.len(), 15);
+    check(mesh, &r);
     eprintln!(
-        "{mesh}: {total} rays in {:.1} s{}",
-        start.elapsed().as_secs_f64(),
-        if brute { " (native backend is brute force until the BVH lands: ray count capped)" } else { "" }
+        "{mesh}: {total} rays in {:.1} s (plus {SWEEP_COUNT} per set through 15 variants)",
+        start.elapsed().as_secs_f64()
     );
 }
 

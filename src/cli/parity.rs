@@ -55,6 +55,10 @@ pub struct ParityArgs {
     /// Compare only the default native configuration instead of every builder x traversal.
     #[arg(long)]
     pub default_only: bool,
+    /// Rays per set for the builder x traversal variants other than the default
+    /// `sah/fast` (which always sees every ray); 0 = all rays.
+    #[arg(long, default_value_t = 100_000)]
+    pub sweep_count: usize,
     /// Disagreeing rays to print per set and tracer.
     #[arg(long, default_value_t = 3)]
     pub examples: usize,
@@ -82,6 +86,7 @@ pub fn run(args: &ParityArgs) -> Result<()> {
         reference: args.reference,
         stress: args.rays == RaysArg::All,
         max_examples: args.examples,
+        sweep_count: (args.sweep_count > 0).then_some(args.sweep_count),
         variants: if args.default_only {
             vec![crate::accel::AccelConfig::default()]
         } else {

@@ -75,13 +75,18 @@ impl Reference {
     }
 }
 
-/// Every native builder x traversal, with the watertight test.
+/// Every native builder x traversal, with the watertight test; the default
+/// configuration (`sah/fast`) first.
 pub fn native_variants() -> Vec<AccelConfig> {
     use clap::ValueEnum;
-    let mut v = Vec::new();
+    let default = AccelConfig { backend: Backend::Native, ..Default::default() };
+    let mut v = vec![default];
     for &builder in Builder::value_variants() {
         for &traversal in Traversal::value_variants() {
-            v.push(AccelConfig { backend: Backend::Native, builder, traversal, ..Default::default() });
+            let cfg = AccelConfig { backend: Backend::Native, builder, traversal, ..Default::default() };
+            if cfg != default {
+                v.push(cfg);
+            }
         }
     }
     v
@@ -117,8 +122,11 @@ pub struct ParityOptions {
     pub seed: u64,
     /// The reference.
     pub reference: Reference,
-    /// The tracers under test (default: [`native_variants`]).
+    /// The tracers under test (default: [`native_variants`], the default
+    /// configuration first).
     pub variants: Vec<AccelConfig>,
+    /// Rays per set for every variant after the first (`None`: all rays).
+    pub sweep_count: Option<usize>,
     /// Also run the numerical stress report (watertight vs Moller-Trumbore vs reference).
     pub stress: bool,
     /// How many disagreeing rays to keep per set and variant.
@@ -133,6 +141,7 @@ impl Default for ParityOptions {
             seed: 1,
             reference: Reference::Embree,
             variants: native_variants(),
+            sweep_count: None,
             stress: false,
             max_examples: 5,
         }
@@ -553,16 +562,29 @@ pub fn run(ctx: &RayContext, opts: &ParityOptions) -> crate::Result<ParityReport
             let (leaks, selfh) = count_failures(&set, &ref_hits);
             report.reference_leaks = leaks;
             report.reference_self_hits = selfh;
-            for (cfg, tracer) in opts.variants.iter().zip(&tracers[1..]) {
-                let hits = trace_all(tracer.as_ref(), &set.rays);
-                let occ = occluded_all(tracer.as_ref(), &set);
+            // The first variant sees every ray; the others the first
+            // `sweep_count` (the slow reference traversals would otherwise
+            // dominate the run).
+            let sweep = opts.sweep_count.unwrap_or(usize::MAX).min(set.rays.len());
+            let sub = RaySet {
+                rays: set.rays[..sweep].to_vec(),
+                tags: set.tags[..sweep].to_vec(),
+                prims: set.prims.clone(),
+                name: set.name.clone(),
+                kind: set.kind,
+                seed: set.seed,
+            };
+            for (i, (cfg, tracer)) in opts.variants.iter().zip(&tracers[1..]).enumerate() {
+                let (s, n) = if i == 0 { (&set, set.rays.len()) } else { (&sub, sweep) };
+                let hits = trace_all(tracer.as_ref(), &s.rays);
+                let occ = occluded_all(tracer.as_ref(), s);
                 report.variants.push(compare(
                     &config_label(cfg),
-                    &set,
+                    s,
                     &hits,
                     &occ,
-                    &ref_hits,
-                    &ref_occ,
+                    &ref_hits[..n],
+                    &ref_occ[..n],
                     opts.max_examples,
                 ));
             }
