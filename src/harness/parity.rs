@@ -252,8 +252,13 @@ pub struct StressRow {
     pub rays: usize,
     /// Leaks per million rays: watertight, Moller-Trumbore, reference.
     pub leaks_per_million: [f64; 3],
-    /// False self-intersections per million spawned rays: watertight, Moller-Trumbore, reference.
+    /// False self-intersections per million spawned rays (robust offset):
+    /// watertight, Moller-Trumbore, reference.
     pub self_hits_per_million: [f64; 3],
+    /// The same with the reports' fixed offset (origin + 1e-4 along the unit direction).
+    pub self_hits_fixed_offset_per_million: [f64; 3],
+    /// The same with no offset (origin on the surface).
+    pub self_hits_no_offset_per_million: [f64; 3],
     /// Spawned rays in the set.
     pub spawned_rays: usize,
 }
@@ -349,7 +354,7 @@ fn is_leak(ray: &Ray, tag: RayTag, h: &Option<Hit>, prims: &Primitives) -> bool 
 }
 
 fn is_self_hit(tag: RayTag, h: &Option<Hit>) -> bool {
-    matches!((tag, h), (RayTag::Spawned { prim } | RayTag::Shadow { prim }, Some(h)) if h.prim == prim)
+    matches!((tag, h), (RayTag::Spawned { prim, .. } | RayTag::Shadow { prim, .. }, Some(h)) if h.prim == prim)
 }
 
 /// Leaks and false self-intersections among `hits` on `set`.
@@ -597,12 +602,36 @@ pub fn run(ctx: &RayContext, opts: &ParityOptions) -> crate::Result<ParityReport
                 }
                 leaks[2] = report.reference_leaks;
                 selfh[2] = report.reference_self_hits;
+                // The same spawned rays leaving from the unoffset hit point,
+                // moved by the reports' fixed epsilon or not at all.
+                let respawn = |eps: f32| {
+                    let mut s = set.clone();
+                    for (r, t) in s.rays.iter_mut().zip(&s.tags) {
+                        if let RayTag::Spawned { from, .. } | RayTag::Shadow { from, .. } = *t {
+                            r.origin = from + eps * r.dir.normalize();
+                        }
+                    }
+                    s
+                };
+                let mut fixed = [0u64; 3];
+                let mut none = [0u64; 3];
+                if report.spawned_rays > 0 {
+                    for (eps, out) in [(1e-4_f32, &mut fixed), (0.0, &mut none)] {
+                        let s = respawn(eps);
+                        let all = [&stress_tracers[0], &stress_tracers[1], &tracers[0]];
+                        for (k, t) in all.iter().enumerate() {
+                            out[k] = count_failures(&s, &trace_all(t.as_ref(), &s.rays)).1;
+                        }
+                    }
+                }
                 let per_m = |n: u64, d: usize| if d == 0 { 0.0 } else { n as f64 * 1e6 / d as f64 };
                 stress.push(StressRow {
                     set: set.name.clone(),
                     rays: set.rays.len(),
                     leaks_per_million: leaks.map(|n| per_m(n, set.rays.len())),
                     self_hits_per_million: selfh.map(|n| per_m(n, report.spawned_rays)),
+                    self_hits_fixed_offset_per_million: fixed.map(|n| per_m(n, report.spawned_rays)),
+                    self_hits_no_offset_per_million: none.map(|n| per_m(n, report.spawned_rays)),
                     spawned_rays: report.spawned_rays,
                 });
             }
@@ -702,28 +731,25 @@ pub fn format_report(r: &ParityReport) -> String {
     }
     if !r.stress.is_empty() {
         let [a, b, c] = &r.stress_tracers;
-        let _ = writeln!(
-            o,
-            "numerical stress (leaks per million rays | false self-intersections per million spawned rays)"
-        );
-        let _ = writeln!(
-            o,
-            "  {:<14} {:>9} {:>12} {:>16} {:>12} | {:>9} {:>12} {:>16} {:>12}",
-            "set", "rays", a, b, c, "spawned", a, b, c
-        );
+        let _ = writeln!(o, "numerical stress: leaks per million rays ({a} / {b} / {c})");
         for s in &r.stress {
+            let [x, y, z] = s.leaks_per_million;
+            let _ = writeln!(o, "  {:<14} {:>9} rays: {:>10.1} {:>10.1} {:>10.1}", s.set, s.rays, x, y, z);
+        }
+        let _ = writeln!(
+            o,
+            "false self-intersections per million spawned rays ({a} / {b} / {c}), by offset: robust | fixed 1e-4 | none"
+        );
+        for s in r.stress.iter().filter(|s| s.spawned_rays > 0) {
+            let f = |v: [f64; 3]| format!("{:>9.1} {:>9.1} {:>9.1}", v[0], v[1], v[2]);
             let _ = writeln!(
                 o,
-                "  {:<14} {:>9} {:>12.1} {:>16.1} {:>12.1} | {:>9} {:>12.1} {:>16.1} {:>12.1}",
+                "  {:<14} {:>9} spawned: {} | {} | {}",
                 s.set,
-                s.rays,
-                s.leaks_per_million[0],
-                s.leaks_per_million[1],
-                s.leaks_per_million[2],
                 s.spawned_rays,
-                s.self_hits_per_million[0],
-                s.self_hits_per_million[1],
-                s.self_hits_per_million[2]
+                f(s.self_hits_per_million),
+                f(s.self_hits_fixed_offset_per_million),
+                f(s.self_hits_no_offset_per_million)
             );
         }
     }

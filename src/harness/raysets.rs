@@ -266,12 +266,16 @@ pub enum RayTag {
     Spawned {
         /// The primitive the ray starts on.
         prim: u32,
+        /// The hit point before the robust offset.
+        from: Vec3,
     },
     /// A shadow ray from a hit on primitive `prim`: compared with `occluded`
     /// as well, and hitting `prim` again is a false self-intersection.
     Shadow {
         /// The primitive the ray starts on.
         prim: u32,
+        /// The hit point before the robust offset.
+        from: Vec3,
     },
 }
 
@@ -533,7 +537,7 @@ fn generate_one(ctx: &RayContext, kind: SetKind, name: String, seed: u64, count:
                     let o = offset_origin(p, err, n, lp - p);
                     // Up to the light point (which is not geometry): t in [0, 1].
                     rays.push(Ray::with_range(o, lp - o, 0.0, 1.0));
-                    tags.push(RayTag::Shadow { prim: hit.prim });
+                    tags.push(RayTag::Shadow { prim: hit.prim, from: p });
                 } else {
                     // Half the rays leave on the side they arrived from
                     // (reflection), half go through (transmission).
@@ -545,7 +549,7 @@ fn generate_one(ctx: &RayContext, kind: SetKind, name: String, seed: u64, count:
                     }
                     let o = offset_origin(p, err, n, w);
                     rays.push(Ray::new(o, w));
-                    tags.push(RayTag::Spawned { prim: hit.prim });
+                    tags.push(RayTag::Spawned { prim: hit.prim, from: p });
                 }
             }
         }
