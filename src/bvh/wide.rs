@@ -105,7 +105,7 @@ fn box8_scalar(n: &WideNode, p: &WidePre, cull: f32) -> (u32, [f32; WIDTH]) {
     let s = far_scale();
     let mut mask = 0;
     let mut near = [0.0; WIDTH];
-    for l in 0..WIDTH {
+    for (l, near_l) in near.iter_mut().enumerate() {
         let tn_x = (n.b[p.near_row[0]][l] - p.o.x) * p.inv.x;
         let tn_y = (n.b[p.near_row[1]][l] - p.o.y) * p.inv.y;
         let tn_z = (n.b[p.near_row[2]][l] - p.o.z) * p.inv.z;
@@ -114,7 +114,7 @@ fn box8_scalar(n: &WideNode, p: &WidePre, cull: f32) -> (u32, [f32; WIDTH]) {
         let tf_z = (n.b[p.far_row[2]][l] - p.o.z) * p.inv.z * s;
         let tn = tn_x.max(tn_y).max(tn_z).max(p.t_min);
         let tf = tf_x.min(tf_y).min(tf_z).min(cull);
-        near[l] = tn;
+        *near_l = tn;
         mask |= u32::from(tn <= tf) << l;
     }
     (mask, near)
