@@ -2,15 +2,27 @@
 //! Mitsuba 3 (images).
 //!
 //! Data flows one way: scene file -> [`scene`] -> acceleration structure
-//! ([`accel`]) -> [`integrator`] -> film -> [`post`] -> output, with the
+//! ([`accel`]) -> [`integrator`] -> [`film`] -> [`post`] -> output, with the
 //! differential harness beside it.
 
 pub mod accel;
 pub mod bvh;
+pub mod camera;
 pub mod cli;
 pub mod error;
+pub mod features;
+pub mod film;
 pub mod geometry;
+pub mod integrator;
+pub mod light;
+pub mod material;
 pub mod mesh;
+pub mod post;
+pub mod render;
 pub mod rng;
+pub mod sampler;
+pub mod scene;
+pub mod shading;
+pub mod texture;
 
 pub use error::{Error, Result};

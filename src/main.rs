@@ -12,6 +12,10 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Render a scene file to a PNG or EXR image.
+    Render(rtdiff::cli::render::RenderArgs),
+    /// Trace one pixel and print every ray it causes (headless visual debugging).
+    Debug(rtdiff::cli::debug::DebugArgs),
     /// Print BVH statistics (nodes, leaves, levels, leaf sizes, SAH cost, memory, build time) per builder.
     BvhStats(rtdiff::cli::bvh_stats::BvhStatsArgs),
     /// Time BVH builds and traversals (and Embree, when built with it) on primary, incoherent and shadow rays.
@@ -20,9 +24,11 @@ enum Command {
 
 fn main() {
     let cli = Cli::parse();
-    let result: rtdiff::Result<()> = match cli.command {
-        Command::BvhStats(args) => rtdiff::cli::bvh_stats::run(&args),
-        Command::Bench(args) => rtdiff::cli::bench::run(&args),
+    let result = match &cli.command {
+        Command::Render(a) => rtdiff::cli::render::run(a),
+        Command::Debug(a) => rtdiff::cli::debug::run(a),
+        Command::BvhStats(a) => rtdiff::cli::bvh_stats::run(a),
+        Command::Bench(a) => rtdiff::cli::bench::run(a),
     };
     if let Err(e) = result {
         eprintln!("rtdiff: error: {e}");

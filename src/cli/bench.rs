@@ -19,7 +19,7 @@ use crate::geometry::{Hit, Primitives, Ray};
 /// Arguments of `rtdiff bench`.
 #[derive(clap::Args, Debug)]
 pub struct BenchArgs {
-    /// Meshes (OBJ, normalised to the unit sphere) or scene files; default
+    /// Scene files, or OBJ meshes (normalised to the unit sphere); default
     /// assets/dragon_87k.obj and assets/dragon_full.obj when present.
     pub scenes: Vec<PathBuf>,
     /// Timed runs per measurement (the median is reported).

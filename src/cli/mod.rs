@@ -1,5 +1,7 @@
-//! Command-line subcommands: each parses nothing itself (clap does that in
-//! `main.rs`) and calls into the library.
+//! Command-line subcommands: clap parses the arguments in `main.rs`; each
+//! module here turns them into library calls.
 
 pub mod bench;
 pub mod bvh_stats;
+pub mod debug;
+pub mod render;

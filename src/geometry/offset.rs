@@ -76,17 +76,25 @@ pub fn next_down(v: f32) -> f32 {
 /// on the side of the geometric normal `n` that `w` points to.
 #[inline]
 pub fn offset_origin(p: Vec3, p_err: Vec3, n: Vec3, w: Vec3) -> Vec3 {
-    let n = n.normalize_or_zero();
-    let d = n.abs().dot(p_err);
-    let mut offset = d * n;
+    let mut n = n.normalize_or_zero();
     if w.dot(n) < 0.0 {
-        offset = -offset;
+        n = -n;
     }
-    let mut po = p + offset;
+    // pbrt-v4 offsets by |n|.p_err, the error bound projected on the normal.
+    // That projection vanishes for a point exactly on an axis-aligned plane,
+    // yet the next intersection test shears the ray and mixes the components,
+    // so its own rounding is of the order of the error in *any* direction: use
+    // the bound's full length (>= the projection; still relative to the scale).
+    let d = p_err.length();
+    let mut po = p + d * n;
+    // Round away from the surface in every component the normal moves. Unlike
+    // pbrt-v4 this also steps one ulp when the error bound is zero (a point
+    // exactly on an axis-aligned plane), because rays here accept t = t_min = 0
+    // (Embree's closed interval) where pbrt rejects t <= 0.
     for i in 0..3 {
-        if offset[i] > 0.0 {
+        if n[i] > 0.0 {
             po[i] = next_up(po[i]);
-        } else if offset[i] < 0.0 {
+        } else if n[i] < 0.0 {
             po[i] = next_down(po[i]);
         }
     }
@@ -124,5 +132,9 @@ mod tests {
         let down = offset_origin(p, e, n, Vec3::new(0.1, -1.0, 0.0));
         assert!(up.y > p.y && down.y < p.y);
         assert!(up.y - p.y >= e.y);
+        // Zero error bound (point exactly on the plane y = 0): still leaves the plane.
+        let q = Vec3::new(0.5, 0.0, 0.25);
+        assert!(offset_origin(q, Vec3::ZERO, n, Vec3::Y).y > 0.0);
+        assert!(offset_origin(q, Vec3::ZERO, n, -Vec3::Y).y < 0.0);
     }
 }

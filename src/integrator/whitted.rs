@@ -1,0 +1,267 @@
+//! The reports' recursive (Whitted-style) ray tracer: direct light with hard
+//! and soft shadows, mirror and glossy reflection, alpha-blended transparency.
+
+use glam::{Vec2, Vec3};
+
+use super::debug::{NoRecorder, RayKind, Recorder};
+use super::{Counters, Integrator};
+use crate::accel::Tracer;
+use crate::features::Plan;
+use crate::geometry::offset::{self, SpawnOffset};
+use crate::geometry::{Hit, Ray};
+use crate::light::LightSample;
+use crate::material::Material;
+use crate::sampler::Rng;
+use crate::scene::Scene;
+use crate::shading::{SurfacePoint, model};
+
+/// Shadow rays stop this fraction of the way short of the light sample, so a
+/// light lying exactly on a surface (a light quad modelled as geometry too) is
+/// not occluded by that surface. A relative length, so valid at any scale.
+const SHADOW_T_MAX: f32 = 1.0 - 1.0e-4;
+
+/// Cap on transparent surfaces crossed by one shadow ray (guards against
+/// pathological stacks; each crossing still attenuates).
+const MAX_SHADOW_CROSSINGS: u32 = 64;
+
+/// Everything known about a hit point.
+#[derive(Clone, Copy, Debug)]
+pub struct Interaction {
+    /// Position (computed from barycentrics, not `o + t d`).
+    pub p: Vec3,
+    /// Bound on the absolute error of `p`.
+    pub p_err: Vec3,
+    /// Unit geometric normal, facing the incoming ray.
+    pub ng: Vec3,
+    /// Unit shading normal, on the same side as `ng`.
+    pub ns: Vec3,
+    /// Texture coordinates (zero without uvs).
+    pub uv: Vec2,
+    /// Whether `uv` is meaningful.
+    pub has_uv: bool,
+    /// Material index.
+    pub material: u32,
+}
+
+/// The recursive tracer of the reports, in either shading model.
+pub struct Whitted<'a> {
+    scene: &'a Scene,
+    tracer: &'a dyn Tracer,
+    plan: Plan,
+    offset: SpawnOffset,
+}
+
+impl<'a> Whitted<'a> {
+    /// An integrator over `scene` whose rays are answered by `tracer`, doing only what `plan` asks.
+    pub fn new(scene: &'a Scene, tracer: &'a dyn Tracer, plan: Plan) -> Self {
+        Self { scene, tracer, plan, offset: scene.params.ray_offset }
+    }
+
+    /// Surface data at `hit` along `ray`.
+    pub fn interaction(&self, ray: &Ray, hit: &Hit) -> Interaction {
+        let prims = &self.scene.prims;
+        let nt = prims.triangles.len();
+        let i = hit.prim as usize;
+        let (p, p_err, mut ng, mut ns, uv, has_uv) = if i < nt {
+            let v = prims.triangles[i].v;
+            let w = [1.0 - hit.u - hit.v, hit.u, hit.v];
+            let p = w[0] * v[0] + w[1] * v[1] + w[2] * v[2];
+            let ng = prims.triangles[i].normal().normalize();
+            let sh = &self.scene.triangle_shading[i];
+            let ns = if self.plan.normal_interpolation {
+                (w[0] * sh.normals[0] + w[1] * sh.normals[1] + w[2] * sh.normals[2]).normalize_or(ng)
+            } else {
+                ng
+            };
+            let uv = if self.plan.textures && sh.has_uvs {
+                w[0] * sh.uvs[0] + w[1] * sh.uvs[1] + w[2] * sh.uvs[2]
+            } else {
+                Vec2::ZERO
+            };
+            (p, offset::triangle_point_error(w, v), ng, ns, uv, sh.has_uvs)
+        } else {
+            let s = prims.spheres[i - nt];
+            let n = (ray.at(hit.t) - s.center).normalize();
+            let p = s.center + s.radius * n;
+            (p, offset::sphere_point_error(p), n, n, Vec2::new(hit.u, 1.0 - hit.v), true)
+        };
+        // Two-sided surfaces: both normals face the side the ray came from.
+        if ng.dot(ray.dir) > 0.0 {
+            ng = -ng;
+        }
+        if ns.dot(ng) < 0.0 {
+            ns = -ns;
+        }
+        Interaction { p, p_err, ng, ns, uv, has_uv, material: self.scene.material_of(hit.prim) }
+    }
+
+    /// A ray leaving `it` in direction `d` (`t_max` in units of `d`).
+    #[inline]
+    fn spawn(&self, it: &Interaction, d: Vec3, t_max: f32) -> Ray {
+        Ray::with_range(offset::spawn_origin(self.offset, it.p, it.p_err, it.ng, d), d, 0.0, t_max)
+    }
+
+    /// Diffuse colour at `it` (texture lookup only when the plan has textures).
+    #[inline]
+    fn diffuse(&self, m: &Material, it: &Interaction, c: &mut Counters) -> Vec3 {
+        if self.plan.textures
+            && it.has_uv
+            && let Some(t) = &m.kd_texture
+        {
+            c.texture_lookups += 1;
+            return if self.plan.bilinear { t.bilinear(it.uv.x, it.uv.y) } else { t.nearest(it.uv.x, it.uv.y) };
+        }
+        m.kd
+    }
+
+    /// Fraction of light from `target` that reaches `it`: 0 or 1 for opaque
+    /// blockers, attenuated by `1 - opacity` per transparent surface crossed.
+    pub fn visibility<R: Recorder>(&self, it: &Interaction, target: Vec3, c: &mut Counters, rec: &mut R) -> f32 {
+        let origin = offset::spawn_origin(self.offset, it.p, it.p_err, it.ng, target - it.p);
+        let mut ray = Ray::with_range(origin, target - origin, 0.0, SHADOW_T_MAX);
+        c.shadow_rays += 1;
+        if !self.plan.transparency && !R::ACTIVE {
+            return if self.tracer.occluded(&ray) { 0.0 } else { 1.0 };
+        }
+        let mut transmitted = 1.0;
+        for _ in 0..MAX_SHADOW_CROSSINGS {
+            let hit = self.tracer.intersect(&ray);
+            rec.shadow_ray(&ray, hit.as_ref());
+            let Some(hit) = hit else { return transmitted };
+            let blocker = self.interaction(&ray, &hit);
+            let m = &self.scene.materials[blocker.material as usize];
+            if !m.is_transparent() || !self.plan.transparency {
+                return 0.0;
+            }
+            transmitted *= 1.0 - m.opacity;
+            let o = offset::spawn_origin(self.offset, blocker.p, blocker.p_err, blocker.ng, ray.dir);
+            ray = Ray::with_range(o, target - o, 0.0, SHADOW_T_MAX);
+            c.shadow_rays += 1;
+        }
+        0.0
+    }
+
+    /// Light reflected at `it` towards `wo` from every light.
+    #[allow(clippy::too_many_arguments)]
+    fn direct<R: Recorder>(
+        &self,
+        it: &Interaction,
+        m: &Material,
+        kd: Vec3,
+        wo: Vec3,
+        rng: &mut Rng,
+        c: &mut Counters,
+        rec: &mut R,
+    ) -> Vec3 {
+        let sp = SurfacePoint { p: it.p, n: it.ns, wo, kd, ks: m.ks, shininess: m.shininess };
+        let shading = model(m.model);
+        let mut sum = Vec3::ZERO;
+        for (li, light) in self.scene.lights.iter().enumerate() {
+            let point = light.is_point();
+            if !point && !self.plan.area_lights {
+                continue;
+            }
+            let shadows = if point { self.plan.hard_shadows } else { self.plan.soft_shadows };
+            let (n, sampling) = (self.scene.params.light_samples, self.scene.params.light_sampling);
+            // Shade each sample as the light produces it (no list, no allocation).
+            light.sample(n, sampling, rng, &mut |s: LightSample| {
+                c.light_samples += 1;
+                let f = shading.direct(&sp, &s);
+                if f != Vec3::ZERO {
+                    let vis = if shadows { self.visibility(it, s.position, c, rec) } else { 1.0 };
+                    sum += vis * f;
+                    rec.light_sample(li, &s, f, vis);
+                } else {
+                    rec.light_sample(li, &s, f, 0.0);
+                }
+            });
+        }
+        sum
+    }
+
+    /// Mirror or glossy reflection at `it` of the incoming direction `d`.
+    #[allow(clippy::too_many_arguments)]
+    fn reflection<R: Recorder>(
+        &self,
+        it: &Interaction,
+        m: &Material,
+        d: Vec3,
+        depth: u32,
+        rng: &mut Rng,
+        c: &mut Counters,
+        rec: &mut R,
+    ) -> Vec3 {
+        let r = (d - 2.0 * d.dot(it.ns) * it.ns).normalize();
+        if !self.plan.glossy {
+            c.secondary_rays += 1;
+            return self.trace_as(RayKind::Reflection, &self.spawn(it, r, f32::INFINITY), depth + 1, rng, c, rec);
+        }
+        // The reports' glossy reflection: perturb r inside a square of side
+        // 1 / shininess perpendicular to it and average N rays.
+        let a = 1.0 / m.shininess.max(f32::MIN_POSITIVE);
+        let (u, w) = r.any_orthonormal_pair();
+        // Split into N rays at the first glossy bounce only: deeper glossy
+        // bounces follow one perturbed ray each, so the ray count grows
+        // linearly with depth instead of as N^depth (two facing glossy
+        // mirrors at depth 5 would otherwise cost N^5 rays per pixel).
+        let n = if depth == 0 { self.scene.params.glossy_samples } else { 1 };
+        let mut sum = Vec3::ZERO;
+        for _ in 0..n {
+            let du = (rng.next_f32() - 0.5) * a;
+            let dw = (rng.next_f32() - 0.5) * a;
+            let g = (r + du * u + dw * w).normalize();
+            if g.dot(it.ng) <= 0.0 {
+                continue; // would enter the surface: no light arrives from there
+            }
+            c.secondary_rays += 1;
+            sum += self.trace_as(RayKind::Glossy, &self.spawn(it, g, f32::INFINITY), depth + 1, rng, c, rec);
+        }
+        sum / n as f32
+    }
+
+    /// Radiance along `ray` at recursion depth `depth`.
+    pub fn trace(&self, ray: &Ray, depth: u32, rng: &mut Rng, c: &mut Counters) -> Vec3 {
+        self.trace_as(RayKind::Camera, ray, depth, rng, c, &mut NoRecorder)
+    }
+
+    /// [`Whitted::trace`] reporting every ray, hit, light sample and shadow ray to `rec`.
+    pub fn trace_as<R: Recorder>(
+        &self,
+        kind: RayKind,
+        ray: &Ray,
+        depth: u32,
+        rng: &mut Rng,
+        c: &mut Counters,
+        rec: &mut R,
+    ) -> Vec3 {
+        rec.begin(kind, ray, depth);
+        let Some(hit) = self.tracer.intersect(ray) else {
+            rec.end(None, self.scene.background);
+            return self.scene.background;
+        };
+        let it = self.interaction(ray, &hit);
+        let m = &self.scene.materials[it.material as usize];
+        let kd = self.diffuse(m, &it, c);
+        let d = ray.dir.normalize();
+        let mut color = if self.plan.shading { self.direct(&it, m, kd, -d, rng, c, rec) } else { kd };
+        let deeper = depth < self.scene.params.max_depth;
+        if self.plan.reflections && deeper && m.is_reflective() {
+            color += m.ks * self.reflection(&it, m, d, depth, rng, c, rec);
+        }
+        if self.plan.transparency && deeper && m.is_transparent() {
+            c.secondary_rays += 1;
+            let behind =
+                self.trace_as(RayKind::Transmission, &self.spawn(&it, d, f32::INFINITY), depth + 1, rng, c, rec);
+            color = m.opacity * color + (1.0 - m.opacity) * behind;
+        }
+        rec.end(Some((&hit, &it)), color);
+        color
+    }
+}
+
+impl Integrator for Whitted<'_> {
+    fn radiance(&self, ray: &Ray, rng: &mut Rng, counters: &mut Counters) -> Vec3 {
+        counters.primary_rays += 1;
+        self.trace(ray, 0, rng, counters)
+    }
+}

@@ -1,0 +1,3 @@
+//! Post-processing applied to the film.
+
+pub mod bloom;

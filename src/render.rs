@@ -1,0 +1,124 @@
+//! The render loop: pixels in parallel, deterministic per-pixel sampling,
+//! progress on stderr.
+
+use std::time::Instant;
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use crate::accel::Tracer;
+use crate::error::{Error, Result};
+use crate::features::Plan;
+use crate::film::Image;
+use crate::integrator::{Counters, Integrator, Whitted};
+use crate::sampler::Rng;
+use crate::scene::Scene;
+
+/// How to run a render.
+#[derive(Clone, Debug, Default)]
+pub struct RenderOptions {
+    /// Worker threads (default: all cores). The image does not depend on it.
+    pub threads: Option<usize>,
+    /// No progress bar.
+    pub quiet: bool,
+}
+
+/// What a render produced.
+#[derive(Clone, Debug)]
+pub struct RenderResult {
+    /// The image before post-processing.
+    pub image: Image,
+    /// Work counters.
+    pub counters: Counters,
+    /// The features the render actually used.
+    pub plan: Plan,
+    /// Wall-clock render time in seconds.
+    pub seconds: f64,
+}
+
+/// Camera sample `s` of `spp` inside a pixel: the centre for one sample,
+/// jittered strata for a square count, uniform positions otherwise.
+#[inline]
+fn pixel_offset(s: u32, spp: u32, rng: &mut Rng) -> (f32, f32) {
+    if spp == 1 {
+        return (0.5, 0.5);
+    }
+    let k = (spp as f32).sqrt().round() as u32;
+    if k * k == spp {
+        let (i, j) = (s % k, s / k);
+        ((i as f32 + rng.next_f32()) / k as f32, (j as f32 + rng.next_f32()) / k as f32)
+    } else {
+        (rng.next_f32(), rng.next_f32())
+    }
+}
+
+/// Render one pixel.
+#[inline]
+fn render_pixel(scene: &Scene, integ: &dyn Integrator, plan: &Plan, x: u32, y: u32, c: &mut Counters) -> Vec3 {
+    let mut rng = Rng::for_pixel(scene.seed, x, y);
+    let mut sum = Vec3::ZERO;
+    for s in 0..scene.spp {
+        let (ox, oy) = pixel_offset(s, scene.spp, &mut rng);
+        let (px, py) = (x as f32 + ox, y as f32 + oy);
+        if plan.depth_of_field {
+            let n = scene.params.dof_samples;
+            let mut lens = Vec3::ZERO;
+            for _ in 0..n {
+                let (lu, lv) = (rng.next_f32(), rng.next_f32());
+                lens += integ.radiance(&scene.camera.lens_ray(px, py, lu, lv), &mut rng, c);
+            }
+            sum += lens / n as f32;
+        } else {
+            sum += integ.radiance(&scene.camera.ray(px, py), &mut rng, c);
+        }
+    }
+    sum / scene.spp as f32
+}
+
+/// Render `scene` with hits from `tracer`.
+pub fn render(scene: &Scene, tracer: &dyn Tracer, opts: &RenderOptions) -> Result<RenderResult> {
+    let plan = scene.plan();
+    let integ = Whitted::new(scene, tracer, plan);
+    let (w, h) = (scene.width, scene.height);
+    let bar = if opts.quiet {
+        indicatif::ProgressBar::hidden()
+    } else {
+        let b = indicatif::ProgressBar::with_draw_target(Some(h as u64), indicatif::ProgressDrawTarget::stderr());
+        if let Ok(style) = indicatif::ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} rows, {eta} left") {
+            b.set_style(style.progress_chars("=> "));
+        }
+        b.set_message("rendering");
+        b
+    };
+    let mut image = Image::new(w, h);
+    let start = Instant::now();
+    let mut work = || {
+        image
+            .pixels
+            .par_chunks_mut(w as usize)
+            .enumerate()
+            .map(|(y, row)| {
+                let mut c = Counters::default();
+                for (x, px) in row.iter_mut().enumerate() {
+                    *px = render_pixel(scene, &integ, &plan, x as u32, y as u32, &mut c);
+                }
+                bar.inc(1);
+                c
+            })
+            .collect::<Vec<Counters>>()
+    };
+    let rows = match opts.threads {
+        Some(0) => return Err(Error::Invalid("--threads must be at least 1".into())),
+        Some(n) => rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .map_err(|e| Error::Invalid(format!("cannot start {n} threads: {e}")))?
+            .install(work),
+        None => work(),
+    };
+    let seconds = start.elapsed().as_secs_f64();
+    bar.finish_and_clear();
+    let mut counters = Counters::default();
+    rows.iter().for_each(|c| counters.add(c));
+    Ok(RenderResult { image, counters, plan, seconds })
+}

@@ -1,0 +1,123 @@
+//! Image textures with nearest and bilinear lookup.
+//!
+//! Conventions (the reports' and Mitsuba's): `(u, v)` as in OBJ files, so
+//! `v = 1` is the top row of the image; texel `(i, j)` covers
+//! `[i, i+1) x [j, j+1)` in pixel units, so its centre is at `(i + 0.5, j + 0.5)`;
+//! coordinates outside `[0, 1]` clamp to the border texels.
+
+use std::path::Path;
+
+use glam::Vec3;
+
+use crate::error::{Error, Result};
+
+/// A linear-RGB texture.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Texture {
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// Row-major texels, row 0 at the top of the image.
+    pub texels: Vec<Vec3>,
+}
+
+/// sRGB transfer function to linear (IEC 61966-2-1).
+#[inline]
+pub fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+}
+
+/// Linear to sRGB transfer function (IEC 61966-2-1).
+#[inline]
+pub fn linear_to_srgb(c: f32) -> f32 {
+    if c <= 0.003_130_8 { 12.92 * c } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 }
+}
+
+impl Texture {
+    /// Load an image file. 8-bit images are sRGB-decoded unless `raw` (as Mitsuba's `bitmap`).
+    pub fn load(path: &Path, raw: bool) -> Result<Self> {
+        if let Err(e) = std::fs::metadata(path) {
+            return Err(Error::io(path, &e));
+        }
+        let img = image::open(path).map_err(|e| Error::file(path, format!("cannot decode texture: {e}")))?;
+        let rgb = img.to_rgb32f();
+        let (width, height) = rgb.dimensions();
+        if width == 0 || height == 0 {
+            return Err(Error::file(path, "texture has zero size"));
+        }
+        let decode = |c: f32| if raw { c } else { srgb_to_linear(c) };
+        let texels = rgb.pixels().map(|p| Vec3::new(decode(p[0]), decode(p[1]), decode(p[2]))).collect();
+        Ok(Self { width, height, texels })
+    }
+
+    #[inline]
+    fn texel(&self, x: i64, y: i64) -> Vec3 {
+        let x = x.clamp(0, self.width as i64 - 1) as usize;
+        let y = y.clamp(0, self.height as i64 - 1) as usize;
+        self.texels[y * self.width as usize + x]
+    }
+
+    /// The texel whose square contains `(u, v)`.
+    #[inline]
+    pub fn nearest(&self, u: f32, v: f32) -> Vec3 {
+        let x = (u * self.width as f32).floor() as i64;
+        let y = ((1.0 - v) * self.height as f32).floor() as i64;
+        self.texel(x, y)
+    }
+
+    /// Bilinear mix of the four texels whose centres surround `(u, v)`.
+    #[inline]
+    pub fn bilinear(&self, u: f32, v: f32) -> Vec3 {
+        let x = u * self.width as f32 - 0.5;
+        let y = (1.0 - v) * self.height as f32 - 0.5;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let top = (1.0 - fx) * self.texel(x0, y0) + fx * self.texel(x0 + 1, y0);
+        let bottom = (1.0 - fx) * self.texel(x0, y0 + 1) + fx * self.texel(x0 + 1, y0 + 1);
+        (1.0 - fy) * top + fy * bottom
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tex() -> Texture {
+        // 2x2: top row red, green; bottom row blue, white.
+        Texture { width: 2, height: 2, texels: vec![Vec3::X, Vec3::Y, Vec3::Z, Vec3::ONE] }
+    }
+
+    #[test]
+    fn nearest_uses_texel_squares_and_obj_v() {
+        let t = tex();
+        assert_eq!(t.nearest(0.25, 0.75), Vec3::X); // top-left
+        assert_eq!(t.nearest(0.75, 0.75), Vec3::Y); // top-right
+        assert_eq!(t.nearest(0.25, 0.25), Vec3::Z); // bottom-left
+        assert_eq!(t.nearest(0.99, 0.01), Vec3::ONE);
+        assert_eq!(t.nearest(1.5, -3.0), Vec3::ONE); // clamped
+    }
+
+    #[test]
+    fn bilinear_mixes_the_four_texels_at_known_weights() {
+        let t = tex();
+        // At texel centres it returns the texel.
+        assert_eq!(t.bilinear(0.25, 0.75), Vec3::X);
+        // The image centre is the average of all four.
+        assert_eq!(t.bilinear(0.5, 0.5), Vec3::new(0.5, 0.5, 0.5));
+        // x = 0.6*2 - 0.5 = 0.7 -> weights 0.3 / 0.7 between the top texels; y on the top row centre.
+        let c = t.bilinear(0.6, 0.75);
+        assert!((c - (0.3 * Vec3::X + 0.7 * Vec3::Y)).length() < 1e-6, "{c}");
+        // Beyond the border it clamps to the edge texel.
+        assert_eq!(t.bilinear(0.0, 1.0), Vec3::X);
+    }
+
+    #[test]
+    fn srgb_round_trip() {
+        for i in 0..=20 {
+            let c = i as f32 / 20.0;
+            assert!((linear_to_srgb(srgb_to_linear(c)) - c).abs() < 1e-5);
+        }
+    }
+}
