@@ -61,6 +61,8 @@ pub struct BuildInput {
     pub bounds: Vec<BoxA>,
     /// Centre of each primitive's box.
     pub centroids: Vec<Vec3A>,
+    /// Mean of each triangle's vertices (a sphere's centre): the reports' "centroid".
+    pub vertex_means: Vec<Vec3A>,
 }
 
 impl BuildInput {
@@ -75,7 +77,20 @@ impl BuildInput {
             })
             .collect();
         let centroids = bounds.par_iter().with_min_len(4096).map(|b| (b.min + b.max) * 0.5).collect();
-        Self { bounds, centroids }
+        let nt = prims.triangles.len();
+        let vertex_means = (0..prims.len())
+            .into_par_iter()
+            .with_min_len(4096)
+            .map(|i| {
+                if i < nt {
+                    let v = prims.triangles[i].v;
+                    Vec3A::from((v[0] + v[1] + v[2]) / 3.0)
+                } else {
+                    Vec3A::from(prims.spheres[i - nt].center)
+                }
+            })
+            .collect();
+        Self { bounds, centroids, vertex_means }
     }
 
     /// Union of the boxes of `idx`.
