@@ -12,7 +12,7 @@ use glam::Vec3A;
 use crate::accel::Builder;
 use crate::geometry::{Aabb, Primitives};
 
-use super::build::{BinaryBvh, BoxA, BuildInput, Split, Splitter, build_with, partition};
+use super::build::{BinaryBvh, BoxA, BuildInput, Split, Splitter, build_with};
 
 /// Cost of visiting one node, relative to [`INTERSECTION_COST`].
 pub const TRAVERSAL_COST: f32 = 1.0;
@@ -56,9 +56,16 @@ impl Splitter for SahSplit {
         SAH_MAX_DEPTH
     }
 
-    fn split(&self, input: &BuildInput, idx: &mut [u32], bounds: &Aabb, _depth: u32) -> Option<Split> {
+    fn split(
+        &self,
+        input: &BuildInput,
+        idx: &mut [u32],
+        bounds: &Aabb,
+        centroids: Option<BoxA>,
+        _depth: u32,
+    ) -> Option<Split> {
         let n = idx.len();
-        let cb = input.centroid_bounds_of(idx);
+        let cb = centroids.unwrap_or_else(|| input.centroid_bounds_of(idx));
         let ext = cb.max - cb.min;
         // Small nodes need no more bins than primitives (saves clearing empty bins).
         let nb = self.bins.clamp(2, SAH_MAX_BINS).min(n.max(4));
@@ -158,8 +165,21 @@ impl SahSplit {
         let rb = bx[s + 1..].iter().fold(BoxA::EMPTY, |a, &b| a.union(b)).aabb();
         // The same per-lane arithmetic as `bins_of`, on the chosen axis only.
         let (cmin, sc, lastf) = (cb.min[axis], scale[axis], last as f32);
-        let mid = partition(idx, |i| (((cent[i as usize][axis] - cmin) * sc).min(lastf) as usize) <= s);
-        Some(Split { mid, bounds: Some((lb, rb)) })
+        // Partition, gathering each side's centroid box for the children on the way.
+        let (mut lcb, mut rcb) = (BoxA::EMPTY, BoxA::EMPTY);
+        let (mut i, mut j) = (0, n);
+        while i < j {
+            let c = cent[idx[i] as usize];
+            if (((c[axis] - cmin) * sc).min(lastf) as usize) <= s {
+                lcb = lcb.grow(c);
+                i += 1;
+            } else {
+                rcb = rcb.grow(c);
+                j -= 1;
+                idx.swap(i, j);
+            }
+        }
+        Some(Split { mid: i, bounds: Some((lb, rb)), centroids: Some((lcb, rcb)) })
     }
 }
 

@@ -12,7 +12,7 @@
 use crate::accel::Builder;
 use crate::geometry::{Aabb, Primitives};
 
-use super::build::{BinaryBvh, BuildInput, Split, Splitter, build_with, partition};
+use super::build::{BinaryBvh, BoxA, BuildInput, Split, Splitter, build_with, partition};
 
 /// The reports' bin count.
 pub const VOLUME_BINS: usize = 5;
@@ -28,7 +28,14 @@ impl Splitter for VolumeSplit {
         VOLUME_MAX_DEPTH
     }
 
-    fn split(&self, input: &BuildInput, idx: &mut [u32], bounds: &Aabb, _depth: u32) -> Option<Split> {
+    fn split(
+        &self,
+        input: &BuildInput,
+        idx: &mut [u32],
+        bounds: &Aabb,
+        _centroids: Option<BoxA>,
+        _depth: u32,
+    ) -> Option<Split> {
         let axis = bounds.largest_axis();
         let low = bounds.min[axis];
         let length = bounds.extent()[axis];
@@ -65,7 +72,7 @@ impl Splitter for VolumeSplit {
             }
         }
         let (s, _, bl, br) = best?;
-        Some(Split { mid: partition(idx, |i| bin(i) <= s), bounds: Some((bl, br)) })
+        Some(Split { mid: partition(idx, |i| bin(i) <= s), bounds: Some((bl, br)), centroids: None })
     }
 }
 
