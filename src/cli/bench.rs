@@ -185,7 +185,7 @@ fn bench_scene(args: &BenchArgs, prims: Arc<Primitives>) -> Result<()> {
         "\n### Build (median of {} runs; ms; 1 thread = CPU time of the building thread, all threads = wall clock)",
         args.runs
     );
-    println!("{:<28} {:>12} {:>12}", "structure", "1 thread", "all threads");
+    println!("{:<32} {:>12} {:>12}", "structure", "1 thread", "all threads");
     let mut configs: Vec<AccelConfig> = Vec::new();
     for &builder in &builders {
         for (label, traversal) in [("binary", Traversal::Basic), ("binary + 8-wide", Traversal::Fast)] {
@@ -193,7 +193,7 @@ fn bench_scene(args: &BenchArgs, prims: Arc<Primitives>) -> Result<()> {
             let (t1, _) = one.install(|| timed(args.runs, true, || build_tracer(prims.clone(), &cfg).map(|_| ())));
             let (tn, _) = timed(args.runs, false, || build_tracer(prims.clone(), &cfg).map(|_| ()));
             let name = format!("bvh-{} {label}", value_name(&builder));
-            println!("{name:<28} {:>12.2} {:>12.2}", t1 * 1e3, tn * 1e3);
+            println!("{name:<32} {:>12.2} {:>12.2}", t1 * 1e3, tn * 1e3);
         }
         for &traversal in &traversals {
             configs.push(AccelConfig { builder, traversal, ..Default::default() });
@@ -203,7 +203,7 @@ fn bench_scene(args: &BenchArgs, prims: Arc<Primitives>) -> Result<()> {
         let cfg = AccelConfig { backend: Backend::Embree, embree_quality: q, ..Default::default() };
         match timed(args.runs, false, || build_tracer(prims.clone(), &cfg).map(|_| ())) {
             (t, Ok(())) => {
-                println!("{:<28} {:>12} {:>12.2}", format!("embree {}", value_name(&q)), "-", t * 1e3);
+                println!("{:<32} {:>12} {:>12.2}", format!("embree {}", value_name(&q)), "-", t * 1e3);
                 configs.push(cfg);
             }
             (_, Err(e)) => {
@@ -242,7 +242,7 @@ fn bench_scene(args: &BenchArgs, prims: Arc<Primitives>) -> Result<()> {
             args.runs
         );
         println!(
-            "{:<28} {:>9} {:>7} {:>9} {:>7} {:>9} {:>7} {:>6}",
+            "{:<32} {:>9} {:>7} {:>9} {:>7} {:>9} {:>7} {:>6}",
             "tracer", "primary", "x", "incoh.", "x", "shadow", "x", "diff"
         );
         let mut basic: Vec<(Builder, [f64; 3])> = Vec::new();
@@ -265,7 +265,7 @@ fn bench_scene(args: &BenchArgs, prims: Arc<Primitives>) -> Result<()> {
             let base = basic.iter().find(|(b, _)| *b == cfg.builder && cfg.backend == Backend::Native).map(|b| b.1);
             let ratio = |k: usize| base.map_or("-".to_string(), |b| format!("{:.2}", mr[k] / b[k]));
             println!(
-                "{:<28} {:>9.2} {:>7} {:>9.2} {:>7} {:>9.2} {:>7} {:>6}",
+                "{:<32} {:>9.2} {:>7} {:>9.2} {:>7} {:>9.2} {:>7} {:>6}",
                 tracer.name(),
                 mr[0],
                 ratio(0),
