@@ -243,26 +243,27 @@ macro_rules! any_hit {
         let pre = WidePre::new($ray);
         let wr = WatertightRay::new($ray.dir);
         let cull = cull_bound($ray.t_max);
-        let mut stack = [MaybeUninit::<(u32, u32)>::uninit(); STACK];
-        stack[0] = MaybeUninit::new((0, 0));
+        // Only inner nodes are stacked: hit leaves are tested at once, so an
+        // occluder is found before descending further.
+        let mut stack = [MaybeUninit::<u32>::uninit(); STACK];
+        stack[0] = MaybeUninit::new(0);
         let mut sp = 1usize;
         while sp > 0 {
             sp -= 1;
             // SAFETY: entries below sp were written before.
-            let (child, count) = unsafe { stack[sp].assume_init() };
-            if count > 0 {
-                if $self.prims.occluded_leaf(child, count, $ray, &wr, $test) {
-                    return true;
-                }
-                continue;
-            }
-            let node = &$self.nodes[child as usize];
+            let node = &$self.nodes[unsafe { stack[sp].assume_init() } as usize];
             let (mut mask, _) = $box8!(node, &pre, cull);
             while mask != 0 {
                 let l = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
-                stack[sp] = MaybeUninit::new((node.child[l], node.count[l]));
-                sp += 1;
+                if node.count[l] > 0 {
+                    if $self.prims.occluded_leaf(node.child[l], node.count[l], $ray, &wr, $test) {
+                        return true;
+                    }
+                } else {
+                    stack[sp] = MaybeUninit::new(node.child[l]);
+                    sp += 1;
+                }
             }
         }
         false
