@@ -61,13 +61,15 @@ pub struct BuildInput {
     pub bounds: Vec<BoxA>,
     /// Centre of each primitive's box.
     pub centroids: Vec<Vec3A>,
-    /// Mean of each triangle's vertices (a sphere's centre): the reports' "centroid".
+    /// Mean of each triangle's vertices (a sphere's centre): the reports'
+    /// "centroid". Only gathered for splitters that ask for it (else empty).
     pub vertex_means: Vec<Vec3A>,
 }
 
 impl BuildInput {
-    /// Boxes and centroids of every primitive (computed in parallel).
-    pub fn new(prims: &Primitives) -> Self {
+    /// Boxes and centroids of every primitive (computed in parallel), and
+    /// vertex means when `vertex_means` is set.
+    pub fn new(prims: &Primitives, vertex_means: bool) -> Self {
         let bounds: Vec<BoxA> = (0..prims.len())
             .into_par_iter()
             .with_min_len(4096)
@@ -78,7 +80,7 @@ impl BuildInput {
             .collect();
         let centroids = bounds.par_iter().with_min_len(4096).map(|b| (b.min + b.max) * 0.5).collect();
         let nt = prims.triangles.len();
-        let vertex_means = (0..prims.len())
+        let vertex_means = (0..if vertex_means { prims.len() } else { 0 })
             .into_par_iter()
             .with_min_len(4096)
             .map(|i| {
@@ -110,6 +112,11 @@ impl BuildInput {
 pub trait Splitter: Sync {
     /// Deepest level a node may have (the root is level 0); nodes there become leaves.
     fn max_depth(&self) -> u32;
+
+    /// True when [`BuildInput::vertex_means`] is needed.
+    fn needs_vertex_means(&self) -> bool {
+        false
+    }
 
     /// Reorder `idx` (the primitives of a node with box `bounds` at level
     /// `depth`) and return `m` with `0 < m < idx.len()` to split it into
@@ -158,7 +165,7 @@ pub struct BinaryBvh {
 /// Run `splitter` over `prims` and flatten the result.
 pub fn build_with(prims: &Primitives, splitter: &dyn Splitter, builder: Builder) -> BinaryBvh {
     let start = Instant::now();
-    let input = BuildInput::new(prims);
+    let input = BuildInput::new(prims, splitter.needs_vertex_means());
     let mut idx: Vec<u32> = (0..prims.len() as u32).collect();
     let mut nodes = Vec::with_capacity(2 * prims.len().max(1));
     if !idx.is_empty() {

@@ -28,6 +28,10 @@ impl Splitter for VolumeSplit {
         VOLUME_MAX_DEPTH
     }
 
+    fn needs_vertex_means(&self) -> bool {
+        true
+    }
+
     fn split(
         &self,
         input: &BuildInput,
