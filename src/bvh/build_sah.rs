@@ -182,8 +182,10 @@ impl SahSplit {
             li += usize::from(left);
             ri += usize::from(!left);
             let m = glam::BVec3A::splat(left);
-            lcb = BoxA { min: Vec3A::select(m, lcb.min.min(c), lcb.min), max: Vec3A::select(m, lcb.max.max(c), lcb.max) };
-            rcb = BoxA { min: Vec3A::select(m, rcb.min, rcb.min.min(c)), max: Vec3A::select(m, rcb.max, rcb.max.max(c)) };
+            lcb =
+                BoxA { min: Vec3A::select(m, lcb.min.min(c), lcb.min), max: Vec3A::select(m, lcb.max.max(c), lcb.max) };
+            rcb =
+                BoxA { min: Vec3A::select(m, rcb.min, rcb.min.min(c)), max: Vec3A::select(m, rcb.max, rcb.max.max(c)) };
         }
         debug_assert_eq!(li, nl);
         idx.copy_from_slice(order);
