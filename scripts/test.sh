@@ -30,4 +30,9 @@ if [[ -x scripts/setup-embree.sh ]]; then
 fi
 
 say "cargo test ${features[*]:-}"
-cargo test --locked "${features[@]}"
+log="$(mktemp)"
+trap 'rm -f "$log"' EXIT
+cargo test --locked "${features[@]}" 2>&1 | tee "$log"
+# One closing line over every test binary (cargo prints one per binary).
+awk '/^test result:/ { for (i = 1; i <= NF; i++) { if ($(i) ~ /^passed;?$/) p += $(i-1); if ($(i) ~ /^failed;?$/) f += $(i-1) } }
+     END { printf "rtdiff tests: %d passed, %d failed\n", p, f }' "$log"

@@ -2,11 +2,11 @@
 //! (same distance bits, same primitive, same barycentrics) and any-hit agrees
 //! with "a closest hit exists", on 100k rays per scene.
 
-mod bvh_common;
+mod common;
 
 use std::sync::Arc;
 
-use bvh_common::{all_configs, cornell, load_mesh, parity_rays, spheres};
+use common::{all_configs, cornell, load_mesh, parity_rays, spheres};
 use rayon::prelude::*;
 use rtdiff::accel::{AccelConfig, BruteForce, Tracer, Traversal, build_tracer};
 use rtdiff::bvh::BvhTracer;

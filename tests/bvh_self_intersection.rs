@@ -3,11 +3,11 @@
 //! leave when the light is visible in closed form. Scales 1e-4, 1 and 1e4,
 //! and the box translated 1e4 from the origin.
 
-mod bvh_common;
+mod common;
 
 use std::sync::Arc;
 
-use bvh_common::{CORNELL_BOXES, CORNELL_ROOM_TRIS, cornell};
+use common::{CORNELL_BOXES, CORNELL_ROOM_TRIS, cornell};
 use glam::{DVec3, Vec3};
 use rtdiff::accel::{AccelConfig, Traversal, build_tracer};
 use rtdiff::bvh::rays::{Camera, surface_point};

@@ -2,12 +2,12 @@
 //! vertices of closed meshes (the bunny's interior edges, a generated
 //! icosphere) never pass through the surface.
 
-mod bvh_common;
+mod common;
 
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use bvh_common::{icosphere, load_mesh};
+use common::{icosphere, load_mesh};
 use glam::Vec3;
 use rayon::prelude::*;
 use rtdiff::accel::{AccelConfig, Builder, Traversal, build_tracer};

@@ -80,12 +80,9 @@ pub fn offset_origin(p: Vec3, p_err: Vec3, n: Vec3, w: Vec3) -> Vec3 {
     if w.dot(n) < 0.0 {
         n = -n;
     }
-    // pbrt-v4 offsets by |n|.p_err, the error bound projected on the normal.
-    // That projection vanishes for a point exactly on an axis-aligned plane,
-    // yet the next intersection test shears the ray and mixes the components,
-    // so its own rounding is of the order of the error in *any* direction: use
-    // the bound's full length (>= the projection; still relative to the scale).
-    let d = p_err.length();
+    // pbrt-v4's offset: the error bound projected on the normal (the bound is
+    // floored at the vertex scale, see `triangle_point_error`, so it never vanishes).
+    let d = n.abs().dot(p_err);
     let mut po = p + d * n;
     // Round away from the surface in every component the normal moves. Unlike
     // pbrt-v4 this also steps one ulp when the error bound is zero (a point

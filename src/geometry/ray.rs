@@ -28,6 +28,13 @@ impl Ray {
     }
 
     /// The point at parameter `t`.
+    ///
+    /// ```
+    /// use glam::Vec3;
+    /// use rtdiff::geometry::Ray;
+    /// let r = Ray::new(Vec3::ZERO, Vec3::new(0.0, 0.0, 2.0));
+    /// assert_eq!(r.at(1.5), Vec3::new(0.0, 0.0, 3.0));
+    /// ```
     #[inline]
     pub fn at(&self, t: f32) -> Vec3 {
         self.origin + t * self.dir

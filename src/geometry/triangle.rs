@@ -69,6 +69,15 @@ impl WatertightRay {
 
 /// Watertight intersection of `ray` (with precomputed `wr`) and triangle
 /// `(v0, v1, v2)`: `Some((t, u, v))` when `ray.t_min <= t <= ray.t_max`.
+///
+/// ```
+/// use glam::Vec3;
+/// use rtdiff::geometry::Ray;
+/// use rtdiff::geometry::triangle::{WatertightRay, intersect_watertight};
+/// let r = Ray::new(Vec3::new(0.25, 0.25, 1.0), Vec3::new(0.0, 0.0, -1.0));
+/// let hit = intersect_watertight(&r, &WatertightRay::new(r.dir), Vec3::ZERO, Vec3::X, Vec3::Y);
+/// assert_eq!(hit, Some((1.0, 0.25, 0.25)));
+/// ```
 #[inline]
 pub fn intersect_watertight(ray: &Ray, wr: &WatertightRay, v0: Vec3, v1: Vec3, v2: Vec3) -> Option<(f32, f32, f32)> {
     let [kx, ky, kz] = wr.k;

@@ -1,16 +1,19 @@
 //! Helpers shared by the integration tests: scenes built in memory from
-//! small OBJ files written to a temporary folder.
+//! small OBJ files written to a temporary folder, and the meshes, procedural
+//! scenes and ray sets of the BVH tests.
 
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
-use rtdiff::accel::{self, AccelConfig};
+use rtdiff::accel::{self, AccelConfig, Builder, Traversal};
 use rtdiff::film::Image;
+use rtdiff::geometry::{Primitives, Ray, Sphere, Triangle};
+use rtdiff::mesh::{Mesh, load_obj};
 use rtdiff::render::{RenderOptions, RenderResult, render};
+use rtdiff::rng::Pcg32;
 use rtdiff::scene::{Scene, SceneFile};
-
 /// A fresh temporary folder for one test.
 pub fn temp_dir(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("rtdiff-test-{}-{name}", std::process::id()));
@@ -70,4 +73,185 @@ pub fn assert_close(a: Vec3, b: Vec3, rel: f32) {
         let scale = a[i].abs().max(b[i].abs()).max(1e-30);
         assert!((a[i] - b[i]).abs() <= rel * scale, "channel {i}: {a} vs {b} (rel {rel})");
     }
+}
+
+/// Load `assets/NAME.obj`.
+pub fn load_mesh(name: &str) -> Mesh {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets").join(format!("{name}.obj"));
+    load_obj(&path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Every builder x traversal configuration (watertight triangle test).
+pub fn all_configs() -> Vec<AccelConfig> {
+    let mut v = Vec::new();
+    for builder in [Builder::Median, Builder::SahVolume, Builder::Sah] {
+        for traversal in [
+            Traversal::Basic,
+            Traversal::PriorityQueue,
+            Traversal::SortedVector,
+            Traversal::NthElement,
+            Traversal::Fast,
+        ] {
+            v.push(AccelConfig { builder, traversal, ..Default::default() });
+        }
+    }
+    v
+}
+
+fn quad(out: &mut Vec<Triangle>, a: Vec3, b: Vec3, c: Vec3, d: Vec3) {
+    out.push(Triangle { v: [a, b, c] });
+    out.push(Triangle { v: [a, c, d] });
+}
+
+/// Number of room triangles at the start of [`cornell`]; boxes follow, 10 triangles each.
+pub const CORNELL_ROOM_TRIS: usize = 10;
+
+/// Axis-aligned boxes standing in the Cornell-like room: (min, max).
+pub const CORNELL_BOXES: [([f32; 3], [f32; 3]); 2] =
+    [([0.13, 0.0, 0.45], [0.43, 0.3, 0.75]), ([0.55, 0.0, 0.15], [0.85, 0.6, 0.45])];
+
+/// A Cornell-like box of 30 triangles: a unit room open towards -z (floor,
+/// ceiling, back, left and right walls) and two boxes on the floor (five
+/// faces each, no bottom), all in `[0, 1]^3` mapped by `x * scale + shift`.
+pub fn cornell(scale: f32, shift: f32) -> Primitives {
+    let mut t = Vec::new();
+    let p = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    quad(&mut t, p(0., 0., 0.), p(1., 0., 0.), p(1., 0., 1.), p(0., 0., 1.)); // floor
+    quad(&mut t, p(0., 1., 0.), p(0., 1., 1.), p(1., 1., 1.), p(1., 1., 0.)); // ceiling
+    quad(&mut t, p(0., 0., 1.), p(1., 0., 1.), p(1., 1., 1.), p(0., 1., 1.)); // back
+    quad(&mut t, p(0., 0., 0.), p(0., 0., 1.), p(0., 1., 1.), p(0., 1., 0.)); // left
+    quad(&mut t, p(1., 0., 0.), p(1., 1., 0.), p(1., 1., 1.), p(1., 0., 1.)); // right
+    for (lo, hi) in CORNELL_BOXES {
+        let (x0, y0, z0, x1, y1, z1) = (lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+        quad(&mut t, p(x0, y1, z0), p(x1, y1, z0), p(x1, y1, z1), p(x0, y1, z1)); // top
+        quad(&mut t, p(x0, y0, z0), p(x1, y0, z0), p(x1, y1, z0), p(x0, y1, z0)); // front
+        quad(&mut t, p(x0, y0, z1), p(x0, y1, z1), p(x1, y1, z1), p(x1, y0, z1)); // back
+        quad(&mut t, p(x0, y0, z0), p(x0, y1, z0), p(x0, y1, z1), p(x0, y0, z1)); // left
+        quad(&mut t, p(x1, y0, z0), p(x1, y0, z1), p(x1, y1, z1), p(x1, y1, z0)); // right
+    }
+    for tri in &mut t {
+        tri.v = tri.v.map(|v| v * scale + Vec3::splat(shift));
+    }
+    Primitives { triangles: t, spheres: Vec::new() }
+}
+
+/// 150 random spheres of radii spanning two decades above a floor made of two triangles.
+pub fn spheres() -> Primitives {
+    let mut rng = Pcg32::new(7, 3);
+    let spheres = (0..150)
+        .map(|_| Sphere {
+            center: rng.in_box(Vec3::splat(-1.0), Vec3::splat(1.0)),
+            radius: 0.01 * 100f32.powf(rng.next_f32()) * 0.3,
+        })
+        .collect();
+    let mut triangles = Vec::new();
+    let y = -1.2;
+    quad(&mut triangles, Vec3::new(-2., y, -2.), Vec3::new(2., y, -2.), Vec3::new(2., y, 2.), Vec3::new(-2., y, 2.));
+    Primitives { triangles, spheres }
+}
+
+/// An icosphere: the icosahedron subdivided `levels` times, vertices on the unit sphere.
+pub fn icosphere(levels: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let g = (1.0 + 5f32.sqrt()) / 2.0;
+    let mut pos: Vec<Vec3> = [
+        (-1., g, 0.),
+        (1., g, 0.),
+        (-1., -g, 0.),
+        (1., -g, 0.),
+        (0., -1., g),
+        (0., 1., g),
+        (0., -1., -g),
+        (0., 1., -g),
+        (g, 0., -1.),
+        (g, 0., 1.),
+        (-g, 0., -1.),
+        (-g, 0., 1.),
+    ]
+    .iter()
+    .map(|&(x, y, z)| Vec3::new(x, y, z).normalize())
+    .collect();
+    let mut faces: Vec<[u32; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..levels {
+        let mut mid = std::collections::HashMap::new();
+        let mut midpoint = |a: u32, b: u32, pos: &mut Vec<Vec3>| -> u32 {
+            *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                pos.push(((pos[a as usize] + pos[b as usize]) * 0.5).normalize());
+                pos.len() as u32 - 1
+            })
+        };
+        let mut next = Vec::with_capacity(faces.len() * 4);
+        for [a, b, c] in faces {
+            let ab = midpoint(a, b, &mut pos);
+            let bc = midpoint(b, c, &mut pos);
+            let ca = midpoint(c, a, &mut pos);
+            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+        }
+        faces = next;
+    }
+    (pos, faces)
+}
+
+/// A random point on primitive `i` (triangle: uniform barycentrics; sphere: uniform on the surface).
+pub fn point_on(prims: &Primitives, i: usize, rng: &mut Pcg32) -> Vec3 {
+    let nt = prims.triangles.len();
+    if i < nt {
+        let (mut a, mut b) = (rng.next_f32(), rng.next_f32());
+        if a + b > 1.0 {
+            (a, b) = (1.0 - a, 1.0 - b);
+        }
+        let v = prims.triangles[i].v;
+        v[0] + a * (v[1] - v[0]) + b * (v[2] - v[0])
+    } else {
+        let s = prims.spheres[i - nt];
+        s.center + s.radius * rng.unit_vector()
+    }
+}
+
+/// `n` test rays over `prims`: a third with random origins (in the box grown by
+/// half its size) and random directions, a third aimed from such origins at
+/// random points on random primitives (mostly hits, many grazing), a third
+/// aimed likewise but with a finite interval `[t_min, t_max]` around the
+/// target so the closed-interval ends are exercised.
+pub fn parity_rays(prims: &Primitives, n: usize, seed: u64) -> Vec<Ray> {
+    let wb = prims.world_bounds();
+    let e = wb.extent() * 0.5;
+    let (lo, hi) = (wb.min - e, wb.max + e);
+    let mut rng = Pcg32::new(seed, 11);
+    (0..n)
+        .map(|k| {
+            let o = rng.in_box(lo, hi);
+            match k % 3 {
+                0 => Ray::new(o, rng.unit_vector()),
+                1 => {
+                    let p = point_on(prims, rng.below(prims.len() as u32) as usize, &mut rng);
+                    Ray::new(o, p - o)
+                }
+                _ => {
+                    let p = point_on(prims, rng.below(prims.len() as u32) as usize, &mut rng);
+                    Ray::with_range(o, p - o, rng.range(0.0, 0.9), rng.range(0.9, 1.5))
+                }
+            }
+        })
+        .collect()
 }
