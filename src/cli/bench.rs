@@ -40,6 +40,12 @@ pub struct BenchArgs {
     /// Skip the all-threads measurements.
     #[arg(long)]
     pub single_only: bool,
+    /// Primitives per leaf for the median builder.
+    #[arg(long, default_value_t = 1)]
+    pub leaf_size: usize,
+    /// Bins per axis for the sah builder.
+    #[arg(long, default_value_t = 16)]
+    pub bins: usize,
 }
 
 /// The benchmark's point light.
@@ -143,6 +149,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if args.runs == 0 || args.size == 0 {
         return Err(Error::Invalid("--runs and --size must be positive".into()));
     }
+    if args.bins < 2 {
+        return Err(Error::Invalid(format!("--bins must be at least 2 (got {})", args.bins)));
+    }
     let scenes = if args.scenes.is_empty() {
         let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets");
         let mut v = vec![d.join("dragon_87k.obj")];
@@ -189,14 +198,21 @@ fn bench_scene(args: &BenchArgs, prims: Arc<Primitives>) -> Result<()> {
     let mut configs: Vec<AccelConfig> = Vec::new();
     for &builder in &builders {
         for (label, traversal) in [("binary", Traversal::Basic), ("binary + 8-wide", Traversal::Fast)] {
-            let cfg = AccelConfig { builder, traversal, ..Default::default() };
+            let cfg =
+                AccelConfig { builder, traversal, leaf_size: args.leaf_size, bins: args.bins, ..Default::default() };
             let (t1, _) = one.install(|| timed(args.runs, true, || build_tracer(prims.clone(), &cfg).map(|_| ())));
             let (tn, _) = timed(args.runs, false, || build_tracer(prims.clone(), &cfg).map(|_| ()));
             let name = format!("bvh-{} {label}", value_name(&builder));
             println!("{name:<32} {:>12.2} {:>12.2}", t1 * 1e3, tn * 1e3);
         }
         for &traversal in &traversals {
-            configs.push(AccelConfig { builder, traversal, ..Default::default() });
+            configs.push(AccelConfig {
+                builder,
+                traversal,
+                leaf_size: args.leaf_size,
+                bins: args.bins,
+                ..Default::default()
+            });
         }
     }
     for q in [EmbreeQuality::Low, EmbreeQuality::Medium, EmbreeQuality::High] {
