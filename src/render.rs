@@ -11,7 +11,7 @@ use crate::error::{Error, Result};
 use crate::features::Plan;
 use crate::film::Image;
 use crate::integrator::{Counters, Integrator, Whitted};
-use crate::sampler::Rng;
+use crate::rng::Pcg32;
 use crate::scene::Scene;
 
 /// How to run a render.
@@ -39,7 +39,7 @@ pub struct RenderResult {
 /// Camera sample `s` of `spp` inside a pixel: the centre for one sample,
 /// jittered strata for a square count, uniform positions otherwise.
 #[inline]
-fn pixel_offset(s: u32, spp: u32, rng: &mut Rng) -> (f32, f32) {
+fn pixel_offset(s: u32, spp: u32, rng: &mut Pcg32) -> (f32, f32) {
     if spp == 1 {
         return (0.5, 0.5);
     }
@@ -55,7 +55,7 @@ fn pixel_offset(s: u32, spp: u32, rng: &mut Rng) -> (f32, f32) {
 /// Render one pixel.
 #[inline]
 fn render_pixel(scene: &Scene, integ: &dyn Integrator, plan: &Plan, x: u32, y: u32, c: &mut Counters) -> Vec3 {
-    let mut rng = Rng::for_pixel(scene.seed, x, y);
+    let mut rng = Pcg32::for_pixel(scene.seed, x, y);
     let mut sum = Vec3::ZERO;
     for s in 0..scene.spp {
         let (ox, oy) = pixel_offset(s, scene.spp, &mut rng);

@@ -1,7 +1,17 @@
-//! A small, seeded, reproducible pseudo-random number generator (PCG32,
-//! O'Neill 2014) for test and benchmark ray sets. Not for cryptography.
+//! The project's one pseudo-random number generator (PCG32, O'Neill 2014):
+//! seeded, reproducible, one independent stream per pixel or per ray set.
+//! Not for cryptography.
 
 use glam::Vec3;
+
+/// SplitMix64 finaliser: a bijective 64-bit mix with good avalanche, so that
+/// neighbouring seeds and stream ids (pixel (x, y) and (x + 1, y)) start far apart.
+#[inline]
+pub fn mix64(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
 
 /// PCG32 (XSH RR variant): 64-bit state, 32-bit output.
 #[derive(Clone, Debug)]
@@ -13,11 +23,16 @@ pub struct Pcg32 {
 impl Pcg32 {
     /// A generator for `seed` on stream `stream` (different streams give independent sequences).
     pub fn new(seed: u64, stream: u64) -> Self {
-        let mut g = Self { state: 0, inc: (stream << 1) | 1 };
+        let mut g = Self { state: 0, inc: (mix64(stream) << 1) | 1 };
         g.next_u32();
-        g.state = g.state.wrapping_add(seed);
+        g.state = g.state.wrapping_add(mix64(seed));
         g.next_u32();
         g
+    }
+
+    /// The stream for pixel `(x, y)` of an image rendered with `seed`.
+    pub fn for_pixel(seed: u64, x: u32, y: u32) -> Self {
+        Self::new(seed, ((y as u64) << 32) | x as u64)
     }
 
     /// Next 32 random bits.
@@ -42,10 +57,10 @@ impl Pcg32 {
         lo + (hi - lo) * self.next_f32()
     }
 
-    /// Uniform integer in `0..n` (`n > 0`; slight modulo bias is irrelevant here).
+    /// Uniform integer in `0..n` (`n > 0`), by Lemire's multiply-shift (bias < n / 2^32).
     #[inline]
     pub fn below(&mut self, n: u32) -> u32 {
-        self.next_u32() % n
+        ((self.next_u32() as u64 * n as u64) >> 32) as u32
     }
 
     /// Uniform point in the box `[lo, hi]`.
@@ -65,6 +80,44 @@ impl Pcg32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn streams_are_reproducible_and_distinct() {
+        let a: Vec<u32> = (0..8)
+            .map({
+                let mut r = Pcg32::for_pixel(7, 3, 4);
+                move |_| r.next_u32()
+            })
+            .collect();
+        let b: Vec<u32> = (0..8)
+            .map({
+                let mut r = Pcg32::for_pixel(7, 3, 4);
+                move |_| r.next_u32()
+            })
+            .collect();
+        let c: Vec<u32> = (0..8)
+            .map({
+                let mut r = Pcg32::for_pixel(7, 4, 3);
+                move |_| r.next_u32()
+            })
+            .collect();
+        assert_eq!(a, b);
+        assert_ne!(a, c);
+    }
+
+    #[test]
+    fn floats_are_in_range_with_the_right_mean() {
+        let mut r = Pcg32::new(1, 2);
+        let n = 100_000;
+        let mut sum = 0.0f64;
+        for _ in 0..n {
+            let x = r.next_f32();
+            assert!((0.0..1.0).contains(&x));
+            sum += x as f64;
+        }
+        // Mean of U(0,1) has standard deviation sqrt(1/12/n) = 9.1e-4: allow 5 sigma.
+        assert!((sum / n as f64 - 0.5).abs() < 5.0 * 9.2e-4);
+    }
 
     #[test]
     fn reproducible_and_in_range() {

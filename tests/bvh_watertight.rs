@@ -78,11 +78,12 @@ fn aimed_rays(pos: &[Vec3], faces: &[[u32; 3]], seed: u64) -> Vec<Ray> {
         }
     }
     for (v, fs) in fans.iter().enumerate() {
-        if interior_vertex[v] && !fs.is_empty() {
-            if let Some(w) = front(fs, &mut rng) {
-                let o = pos[v] + dist * w;
-                rays.push(Ray::new(o, pos[v] - o));
-            }
+        if interior_vertex[v]
+            && !fs.is_empty()
+            && let Some(w) = front(fs, &mut rng)
+        {
+            let o = pos[v] + dist * w;
+            rays.push(Ray::new(o, pos[v] - o));
         }
     }
     rays

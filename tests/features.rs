@@ -535,7 +535,7 @@ fn debug_tree_records_blocked_shadow_rays_and_reflections() {
     let integ = rtdiff::integrator::Whitted::new(&s, tracer.as_ref(), s.plan());
     let mut tree = RayTree::default();
     let mut c = rtdiff::integrator::Counters::default();
-    let mut rng = rtdiff::sampler::Rng::new(0, 0);
+    let mut rng = rtdiff::rng::Pcg32::new(0, 0);
     let color = integ.trace_as(RayKind::Camera, &s.camera.ray(0.5, 0.5), 0, &mut rng, &mut c, &mut tree);
     let root = &tree.roots[0];
     assert_eq!(root.color, <[f32; 3]>::from(color));

@@ -61,11 +61,15 @@ pub struct BuildInput {
     pub bounds: Vec<BoxA>,
     /// Centre of each primitive's box.
     pub centroids: Vec<Vec3A>,
+    /// Mean of each triangle's vertices (a sphere's centre): the reports'
+    /// "centroid". Only gathered for splitters that ask for it (else empty).
+    pub vertex_means: Vec<Vec3A>,
 }
 
 impl BuildInput {
-    /// Boxes and centroids of every primitive (computed in parallel).
-    pub fn new(prims: &Primitives) -> Self {
+    /// Boxes and centroids of every primitive (computed in parallel), and
+    /// vertex means when `vertex_means` is set.
+    pub fn new(prims: &Primitives, vertex_means: bool) -> Self {
         let bounds: Vec<BoxA> = (0..prims.len())
             .into_par_iter()
             .with_min_len(4096)
@@ -75,7 +79,20 @@ impl BuildInput {
             })
             .collect();
         let centroids = bounds.par_iter().with_min_len(4096).map(|b| (b.min + b.max) * 0.5).collect();
-        Self { bounds, centroids }
+        let nt = prims.triangles.len();
+        let vertex_means = (0..if vertex_means { prims.len() } else { 0 })
+            .into_par_iter()
+            .with_min_len(4096)
+            .map(|i| {
+                if i < nt {
+                    let v = prims.triangles[i].v;
+                    Vec3A::from((v[0] + v[1] + v[2]) / 3.0)
+                } else {
+                    Vec3A::from(prims.spheres[i - nt].center)
+                }
+            })
+            .collect();
+        Self { bounds, centroids, vertex_means }
     }
 
     /// Union of the boxes of `idx`.
@@ -96,11 +113,24 @@ pub trait Splitter: Sync {
     /// Deepest level a node may have (the root is level 0); nodes there become leaves.
     fn max_depth(&self) -> u32;
 
+    /// True when [`BuildInput::vertex_means`] is needed.
+    fn needs_vertex_means(&self) -> bool {
+        false
+    }
+
     /// Reorder `idx` (the primitives of a node with box `bounds` at level
     /// `depth`) and return `m` with `0 < m < idx.len()` to split it into
     /// `idx[..m]` and `idx[m..]`, or `None` to make the node a leaf. May also
     /// return the exact boxes of the two sides when it has them.
-    fn split(&self, input: &BuildInput, idx: &mut [u32], bounds: &Aabb, depth: u32) -> Option<Split>;
+    /// `centroids` is the box around the node's centroids when the parent's split computed it.
+    fn split(
+        &self,
+        input: &BuildInput,
+        idx: &mut [u32],
+        bounds: &Aabb,
+        centroids: Option<BoxA>,
+        depth: u32,
+    ) -> Option<Split>;
 }
 
 /// Where a node is cut.
@@ -109,11 +139,13 @@ pub struct Split {
     pub mid: usize,
     /// Boxes of the left and right sides, if the strategy computed them.
     pub bounds: Option<(Aabb, Aabb)>,
+    /// Boxes around the centroids of the left and right sides, if computed.
+    pub centroids: Option<(BoxA, BoxA)>,
 }
 
 impl From<usize> for Split {
     fn from(mid: usize) -> Self {
-        Split { mid, bounds: None }
+        Split { mid, bounds: None, centroids: None }
     }
 }
 
@@ -133,22 +165,24 @@ pub struct BinaryBvh {
 /// Run `splitter` over `prims` and flatten the result.
 pub fn build_with(prims: &Primitives, splitter: &dyn Splitter, builder: Builder) -> BinaryBvh {
     let start = Instant::now();
-    let input = BuildInput::new(prims);
+    let input = BuildInput::new(prims, splitter.needs_vertex_means());
     let mut idx: Vec<u32> = (0..prims.len() as u32).collect();
     let mut nodes = Vec::with_capacity(2 * prims.len().max(1));
     if !idx.is_empty() {
         let root = input.bounds_of(&idx);
-        build_node(splitter, &input, &mut idx, root, 0, 0, &mut nodes);
+        build_node(splitter, &input, &mut idx, root, None, 0, 0, &mut nodes);
     }
     let leaf_prims = LeafPrims::new(prims, &idx);
     BinaryBvh { nodes, prims: leaf_prims, builder, build_time: start.elapsed() }
 }
 
+#[allow(clippy::too_many_arguments)]
 fn build_node(
     s: &dyn Splitter,
     input: &BuildInput,
     idx: &mut [u32],
     bounds: Aabb,
+    centroids: Option<BoxA>,
     first: u32,
     depth: u32,
     out: &mut Vec<Node>,
@@ -159,7 +193,11 @@ fn build_node(
     if n <= 1 || depth >= s.max_depth() {
         return;
     }
-    let Some(Split { mid, bounds: child_bounds }) = s.split(input, idx, &bounds, depth) else { return };
+    let Some(Split { mid, bounds: child_bounds, centroids: child_cb }) = s.split(input, idx, &bounds, centroids, depth)
+    else {
+        return;
+    };
+    let (lc, rc) = child_cb.map_or((None, None), |(l, r)| (Some(l), Some(r)));
     assert!(mid > 0 && mid < n, "split strategy returned an empty side");
     let (l, r) = idx.split_at_mut(mid);
     let (lb, rb) = child_bounds.unwrap_or_else(|| (input.bounds_of(l), input.bounds_of(r)));
@@ -168,12 +206,12 @@ fn build_node(
         let (lv, rv) = rayon::join(
             || {
                 let mut v = Vec::with_capacity(2 * l.len());
-                build_node(s, input, l, lb, first, depth + 1, &mut v);
+                build_node(s, input, l, lb, lc, first, depth + 1, &mut v);
                 v
             },
             || {
                 let mut v = Vec::with_capacity(2 * r.len());
-                build_node(s, input, r, rb, right_first, depth + 1, &mut v);
+                build_node(s, input, r, rb, rc, right_first, depth + 1, &mut v);
                 v
             },
         );
@@ -182,9 +220,9 @@ fn build_node(
         append_shifted(out, &rv);
         out[me] = Node::interior(bounds, right);
     } else {
-        build_node(s, input, l, lb, first, depth + 1, out);
+        build_node(s, input, l, lb, lc, first, depth + 1, out);
         let right = out.len() as u32;
-        build_node(s, input, r, rb, right_first, depth + 1, out);
+        build_node(s, input, r, rb, rc, right_first, depth + 1, out);
         out[me] = Node::interior(bounds, right);
     }
 }

@@ -6,7 +6,7 @@
 use crate::accel::Builder;
 use crate::geometry::{Aabb, Primitives};
 
-use super::build::{BinaryBvh, BuildInput, Split, Splitter, build_with};
+use super::build::{BinaryBvh, BoxA, BuildInput, Split, Splitter, build_with};
 
 /// The reports' maximum tree level.
 pub const MEDIAN_MAX_DEPTH: u32 = 100;
@@ -22,7 +22,14 @@ impl Splitter for MedianSplit {
         MEDIAN_MAX_DEPTH
     }
 
-    fn split(&self, input: &BuildInput, idx: &mut [u32], _bounds: &Aabb, depth: u32) -> Option<Split> {
+    fn split(
+        &self,
+        input: &BuildInput,
+        idx: &mut [u32],
+        _bounds: &Aabb,
+        _centroids: Option<BoxA>,
+        depth: u32,
+    ) -> Option<Split> {
         if idx.len() <= self.leaf_size.max(1) {
             return None;
         }

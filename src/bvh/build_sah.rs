@@ -12,7 +12,7 @@ use glam::Vec3A;
 use crate::accel::Builder;
 use crate::geometry::{Aabb, Primitives};
 
-use super::build::{BinaryBvh, BoxA, BuildInput, Split, Splitter, build_with, partition};
+use super::build::{BinaryBvh, BoxA, BuildInput, Split, Splitter, build_with};
 
 /// Cost of visiting one node, relative to [`INTERSECTION_COST`].
 pub const TRAVERSAL_COST: f32 = 1.0;
@@ -56,9 +56,16 @@ impl Splitter for SahSplit {
         SAH_MAX_DEPTH
     }
 
-    fn split(&self, input: &BuildInput, idx: &mut [u32], bounds: &Aabb, _depth: u32) -> Option<Split> {
+    fn split(
+        &self,
+        input: &BuildInput,
+        idx: &mut [u32],
+        bounds: &Aabb,
+        centroids: Option<BoxA>,
+        _depth: u32,
+    ) -> Option<Split> {
         let n = idx.len();
-        let cb = input.centroid_bounds_of(idx);
+        let cb = centroids.unwrap_or_else(|| input.centroid_bounds_of(idx));
         let ext = cb.max - cb.min;
         // Small nodes need no more bins than primitives (saves clearing empty bins).
         let nb = self.bins.clamp(2, SAH_MAX_BINS).min(n.max(4));
@@ -70,13 +77,14 @@ impl Splitter for SahSplit {
 
 thread_local! {
     /// Per-thread bin storage reused across nodes (no allocation per node).
-    static SCRATCH: std::cell::RefCell<Scratch> = const { std::cell::RefCell::new(Scratch { count: Vec::new(), boxes: Vec::new(), right_cost: Vec::new() }) };
+    static SCRATCH: std::cell::RefCell<Scratch> = const { std::cell::RefCell::new(Scratch { count: Vec::new(), boxes: Vec::new(), right_cost: Vec::new(), order: Vec::new() }) };
 }
 
 struct Scratch {
     count: Vec<u32>,
     boxes: Vec<BoxA>,
     right_cost: Vec<f32>,
+    order: Vec<u32>,
 }
 
 impl SahSplit {
@@ -94,7 +102,7 @@ impl SahSplit {
     ) -> Option<Split> {
         let n = idx.len();
         let last = nb as u32 - 1;
-        let Scratch { count, boxes, right_cost } = scratch;
+        let Scratch { count, boxes, right_cost, order } = scratch;
         count.clear();
         count.resize(3 * nb, 0);
         boxes.clear();
@@ -158,8 +166,31 @@ impl SahSplit {
         let rb = bx[s + 1..].iter().fold(BoxA::EMPTY, |a, &b| a.union(b)).aabb();
         // The same per-lane arithmetic as `bins_of`, on the chosen axis only.
         let (cmin, sc, lastf) = (cb.min[axis], scale[axis], last as f32);
-        let mid = partition(idx, |i| (((cent[i as usize][axis] - cmin) * sc).min(lastf) as usize) <= s);
-        Some(Split { mid, bounds: Some((lb, rb)) })
+        // Stable, branch-free partition through a scratch buffer (the side of
+        // each primitive is unpredictable, so branches would mispredict often),
+        // gathering each side's centroid box for the children on the way.
+        let nl: u32 = count[axis * nb..=axis * nb + s].iter().sum();
+        let nl = nl as usize;
+        order.clear();
+        order.resize(n, 0);
+        let (mut lcb, mut rcb) = (BoxA::EMPTY, BoxA::EMPTY);
+        let (mut li, mut ri) = (0usize, nl);
+        for &id in idx.iter() {
+            let c = cent[id as usize];
+            let left = (((c[axis] - cmin) * sc).min(lastf) as usize) <= s;
+            order[if left { li } else { ri }] = id;
+            li += usize::from(left);
+            ri += usize::from(!left);
+            let m = glam::BVec3A::splat(left);
+            lcb =
+                BoxA { min: Vec3A::select(m, lcb.min.min(c), lcb.min), max: Vec3A::select(m, lcb.max.max(c), lcb.max) };
+            rcb =
+                BoxA { min: Vec3A::select(m, rcb.min, rcb.min.min(c)), max: Vec3A::select(m, rcb.max, rcb.max.max(c)) };
+        }
+        debug_assert_eq!(li, nl);
+        idx.copy_from_slice(order);
+        let i = nl;
+        Some(Split { mid: i, bounds: Some((lb, rb)), centroids: Some((lcb, rcb)) })
     }
 }
 

@@ -1,6 +1,8 @@
 //! The reports' "SAH + binning" builder (section 4.2), kept to reproduce their
-//! table: the node box's largest axis is cut into 5 equal bins,
-//! `bin = floor((c - low) * bins / length)`, and the split after bin `s`
+//! table: the node box's largest axis is cut into 5 equal bins, each
+//! triangle's centroid (the mean of its vertices, as in the reports, not the
+//! box centre the other builders use) goes to bin
+//! `floor((c - low) * bins / length)` with `low`, `length` the node box's, and the split after bin `s`
 //! (`s < bins - 1`) costs `N_l * V_l + N_r * V_r` with `V` the *volume* of
 //! each side's box. The best cost starts at the no-split cost `N * V`, so a
 //! node is a leaf unless some split is strictly cheaper; equal costs prefer
@@ -10,7 +12,7 @@
 use crate::accel::Builder;
 use crate::geometry::{Aabb, Primitives};
 
-use super::build::{BinaryBvh, BuildInput, Split, Splitter, build_with, partition};
+use super::build::{BinaryBvh, BoxA, BuildInput, Split, Splitter, build_with, partition};
 
 /// The reports' bin count.
 pub const VOLUME_BINS: usize = 5;
@@ -26,7 +28,18 @@ impl Splitter for VolumeSplit {
         VOLUME_MAX_DEPTH
     }
 
-    fn split(&self, input: &BuildInput, idx: &mut [u32], bounds: &Aabb, _depth: u32) -> Option<Split> {
+    fn needs_vertex_means(&self) -> bool {
+        true
+    }
+
+    fn split(
+        &self,
+        input: &BuildInput,
+        idx: &mut [u32],
+        bounds: &Aabb,
+        _centroids: Option<BoxA>,
+        _depth: u32,
+    ) -> Option<Split> {
         let axis = bounds.largest_axis();
         let low = bounds.min[axis];
         let length = bounds.extent()[axis];
@@ -34,7 +47,7 @@ impl Splitter for VolumeSplit {
             return None;
         }
         let bin = |i: u32| -> usize {
-            let c = input.centroids[i as usize][axis];
+            let c = input.vertex_means[i as usize][axis];
             (((c - low) * VOLUME_BINS as f32 / length) as usize).min(VOLUME_BINS - 1)
         };
         let mut count = [0usize; VOLUME_BINS];
@@ -63,7 +76,7 @@ impl Splitter for VolumeSplit {
             }
         }
         let (s, _, bl, br) = best?;
-        Some(Split { mid: partition(idx, |i| bin(i) <= s), bounds: Some((bl, br)) })
+        Some(Split { mid: partition(idx, |i| bin(i) <= s), bounds: Some((bl, br)), centroids: None })
     }
 }
 

@@ -39,7 +39,8 @@ impl BvhStats {
     /// Gather statistics of `bvh`; `wide` is its 8-wide collapse (nodes, bytes) if built.
     pub fn of(bvh: &BinaryBvh, wide: Option<(usize, usize)>) -> Self {
         let mut s = Self {
-            builder: format!("{:?}", bvh.builder),
+            builder: clap::ValueEnum::to_possible_value(&bvh.builder)
+                .map_or_else(String::new, |v| v.get_name().to_string()),
             primitives: bvh.prims.len(),
             nodes: bvh.nodes.len(),
             leaves: 0,

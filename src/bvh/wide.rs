@@ -105,7 +105,7 @@ fn box8_scalar(n: &WideNode, p: &WidePre, cull: f32) -> (u32, [f32; WIDTH]) {
     let s = far_scale();
     let mut mask = 0;
     let mut near = [0.0; WIDTH];
-    for l in 0..WIDTH {
+    for (l, near_l) in near.iter_mut().enumerate() {
         let tn_x = (n.b[p.near_row[0]][l] - p.o.x) * p.inv.x;
         let tn_y = (n.b[p.near_row[1]][l] - p.o.y) * p.inv.y;
         let tn_z = (n.b[p.near_row[2]][l] - p.o.z) * p.inv.z;
@@ -114,7 +114,7 @@ fn box8_scalar(n: &WideNode, p: &WidePre, cull: f32) -> (u32, [f32; WIDTH]) {
         let tf_z = (n.b[p.far_row[2]][l] - p.o.z) * p.inv.z * s;
         let tn = tn_x.max(tn_y).max(tn_z).max(p.t_min);
         let tf = tf_x.min(tf_y).min(tf_z).min(cull);
-        near[l] = tn;
+        *near_l = tn;
         mask |= u32::from(tn <= tf) << l;
     }
     (mask, near)
@@ -187,6 +187,7 @@ macro_rules! closest {
                 let node = &$self.nodes[cur.child as usize];
                 let (mut mask, near) = $box8!(node, &pre, cull);
                 if mask != 0 {
+                    $self.prefetch_children(node, mask);
                     let first = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
                     if mask == 0 {
@@ -242,26 +243,27 @@ macro_rules! any_hit {
         let pre = WidePre::new($ray);
         let wr = WatertightRay::new($ray.dir);
         let cull = cull_bound($ray.t_max);
-        let mut stack = [MaybeUninit::<(u32, u32)>::uninit(); STACK];
-        stack[0] = MaybeUninit::new((0, 0));
+        // Only inner nodes are stacked: hit leaves are tested at once, so an
+        // occluder is found before descending further.
+        let mut stack = [MaybeUninit::<u32>::uninit(); STACK];
+        stack[0] = MaybeUninit::new(0);
         let mut sp = 1usize;
         while sp > 0 {
             sp -= 1;
             // SAFETY: entries below sp were written before.
-            let (child, count) = unsafe { stack[sp].assume_init() };
-            if count > 0 {
-                if $self.prims.occluded_leaf(child, count, $ray, &wr, $test) {
-                    return true;
-                }
-                continue;
-            }
-            let node = &$self.nodes[child as usize];
+            let node = &$self.nodes[unsafe { stack[sp].assume_init() } as usize];
             let (mut mask, _) = $box8!(node, &pre, cull);
             while mask != 0 {
                 let l = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
-                stack[sp] = MaybeUninit::new((node.child[l], node.count[l]));
-                sp += 1;
+                if node.count[l] > 0 {
+                    if $self.prims.occluded_leaf(node.child[l], node.count[l], $ray, &wr, $test) {
+                        return true;
+                    }
+                } else {
+                    stack[sp] = MaybeUninit::new(node.child[l]);
+                    sp += 1;
+                }
             }
         }
         false
@@ -329,6 +331,36 @@ impl WideBvh {
             return unsafe { self.occluded_avx2(ray, test) };
         }
         self.occluded_scalar(ray, test)
+    }
+
+    /// Ask the cache for the nodes and leaf primitives of the children in
+    /// `mask`: all but the nearest are visited later, and their memory latency
+    /// (the traversal's main cost) then overlaps with the work in between.
+    #[inline(always)]
+    fn prefetch_children(&self, node: &WideNode, mut mask: u32) {
+        #[cfg(target_arch = "x86_64")]
+        while mask != 0 {
+            use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+            let l = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            let (c, n) = (node.child[l] as usize, node.count[l] as usize);
+            let (p, bytes) = if n == 0 {
+                (self.nodes.as_ptr().wrapping_add(c).cast::<i8>(), std::mem::size_of::<WideNode>())
+            } else {
+                (
+                    self.prims.entries.as_ptr().wrapping_add(c).cast::<i8>(),
+                    n * std::mem::size_of::<super::prims::LeafEntry>(),
+                )
+            };
+            let mut off = 0;
+            while off < bytes {
+                // SAFETY: prefetching is a hint and never faults, whatever the address.
+                unsafe { _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(off)) };
+                off += 64;
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = (node, mask);
     }
 
     fn intersect_scalar(&self, ray: &Ray, test: TriangleTest) -> Option<Hit> {

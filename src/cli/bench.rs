@@ -19,7 +19,7 @@ use crate::geometry::{Hit, Primitives, Ray};
 /// Arguments of `rtdiff bench`.
 #[derive(clap::Args, Debug)]
 pub struct BenchArgs {
-    /// Meshes (OBJ, normalised to the unit sphere) or scene files; default
+    /// Scene files, or OBJ meshes (normalised to the unit sphere); default
     /// assets/dragon_87k.obj and assets/dragon_full.obj when present.
     pub scenes: Vec<PathBuf>,
     /// Timed runs per measurement (the median is reported).
@@ -40,6 +40,12 @@ pub struct BenchArgs {
     /// Skip the all-threads measurements.
     #[arg(long)]
     pub single_only: bool,
+    /// Primitives per leaf for the median builder.
+    #[arg(long, default_value_t = 1)]
+    pub leaf_size: usize,
+    /// Bins per axis for the sah builder.
+    #[arg(long, default_value_t = 16)]
+    pub bins: usize,
 }
 
 /// The benchmark's point light.
@@ -91,7 +97,7 @@ fn thread_cpu_seconds() -> Option<f64> {
     let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
     // SAFETY: ts is a valid, writable timespec.
     let rc = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
-    (rc == 0).then(|| ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9)
+    (rc == 0).then_some(ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9)
 }
 
 #[cfg(not(unix))]
@@ -143,6 +149,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if args.runs == 0 || args.size == 0 {
         return Err(Error::Invalid("--runs and --size must be positive".into()));
     }
+    if args.bins < 2 {
+        return Err(Error::Invalid(format!("--bins must be at least 2 (got {})", args.bins)));
+    }
     let scenes = if args.scenes.is_empty() {
         let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets");
         let mut v = vec![d.join("dragon_87k.obj")];
@@ -185,25 +194,32 @@ fn bench_scene(args: &BenchArgs, prims: Arc<Primitives>) -> Result<()> {
         "\n### Build (median of {} runs; ms; 1 thread = CPU time of the building thread, all threads = wall clock)",
         args.runs
     );
-    println!("{:<28} {:>12} {:>12}", "structure", "1 thread", "all threads");
+    println!("{:<32} {:>12} {:>12}", "structure", "1 thread", "all threads");
     let mut configs: Vec<AccelConfig> = Vec::new();
     for &builder in &builders {
         for (label, traversal) in [("binary", Traversal::Basic), ("binary + 8-wide", Traversal::Fast)] {
-            let cfg = AccelConfig { builder, traversal, ..Default::default() };
+            let cfg =
+                AccelConfig { builder, traversal, leaf_size: args.leaf_size, bins: args.bins, ..Default::default() };
             let (t1, _) = one.install(|| timed(args.runs, true, || build_tracer(prims.clone(), &cfg).map(|_| ())));
             let (tn, _) = timed(args.runs, false, || build_tracer(prims.clone(), &cfg).map(|_| ()));
             let name = format!("bvh-{} {label}", value_name(&builder));
-            println!("{name:<28} {:>12.2} {:>12.2}", t1 * 1e3, tn * 1e3);
+            println!("{name:<32} {:>12.2} {:>12.2}", t1 * 1e3, tn * 1e3);
         }
         for &traversal in &traversals {
-            configs.push(AccelConfig { builder, traversal, ..Default::default() });
+            configs.push(AccelConfig {
+                builder,
+                traversal,
+                leaf_size: args.leaf_size,
+                bins: args.bins,
+                ..Default::default()
+            });
         }
     }
     for q in [EmbreeQuality::Low, EmbreeQuality::Medium, EmbreeQuality::High] {
         let cfg = AccelConfig { backend: Backend::Embree, embree_quality: q, ..Default::default() };
         match timed(args.runs, false, || build_tracer(prims.clone(), &cfg).map(|_| ())) {
             (t, Ok(())) => {
-                println!("{:<28} {:>12} {:>12.2}", format!("embree {}", value_name(&q)), "-", t * 1e3);
+                println!("{:<32} {:>12} {:>12.2}", format!("embree {}", value_name(&q)), "-", t * 1e3);
                 configs.push(cfg);
             }
             (_, Err(e)) => {
@@ -242,7 +258,7 @@ fn bench_scene(args: &BenchArgs, prims: Arc<Primitives>) -> Result<()> {
             args.runs
         );
         println!(
-            "{:<28} {:>9} {:>7} {:>9} {:>7} {:>9} {:>7} {:>6}",
+            "{:<32} {:>9} {:>7} {:>9} {:>7} {:>9} {:>7} {:>6}",
             "tracer", "primary", "x", "incoh.", "x", "shadow", "x", "diff"
         );
         let mut basic: Vec<(Builder, [f64; 3])> = Vec::new();
@@ -265,7 +281,7 @@ fn bench_scene(args: &BenchArgs, prims: Arc<Primitives>) -> Result<()> {
             let base = basic.iter().find(|(b, _)| *b == cfg.builder && cfg.backend == Backend::Native).map(|b| b.1);
             let ratio = |k: usize| base.map_or("-".to_string(), |b| format!("{:.2}", mr[k] / b[k]));
             println!(
-                "{:<28} {:>9.2} {:>7} {:>9.2} {:>7} {:>9.2} {:>7} {:>6}",
+                "{:<32} {:>9.2} {:>7} {:>9.2} {:>7} {:>9.2} {:>7} {:>6}",
                 tracer.name(),
                 mr[0],
                 ratio(0),

@@ -12,7 +12,7 @@ use crate::geometry::Primitives;
 /// Arguments of `rtdiff bvh-stats`.
 #[derive(clap::Args, Debug)]
 pub struct BvhStatsArgs {
-    /// Scene: a Wavefront OBJ mesh or a scene JSON file.
+    /// Scene: a scene JSON file, or a Wavefront OBJ mesh used as is.
     pub scene: PathBuf,
     /// Builders to report (all when none is given).
     #[arg(long, value_enum)]
@@ -48,7 +48,7 @@ pub fn load_primitives(path: &Path, normalize: bool) -> Result<Arc<Primitives>> 
 }
 
 fn load_scene_primitives(path: &Path) -> Result<Arc<Primitives>> {
-    Err(Error::file(path, "expected a Wavefront .obj mesh (scene files need the scene module)"))
+    Ok(crate::scene::Scene::load(path)?.prims)
 }
 
 /// Run `rtdiff bvh-stats`.

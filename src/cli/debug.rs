@@ -11,7 +11,7 @@ use crate::error::{Error, Result};
 use crate::integrator::Counters;
 use crate::integrator::Whitted;
 use crate::integrator::debug::{RayKind, RayNode, RayTree};
-use crate::sampler::Rng;
+use crate::rng::Pcg32;
 use crate::scene::{Overrides, Scene};
 
 /// Arguments of `rtdiff debug`.
@@ -100,7 +100,7 @@ pub fn run(args: &DebugArgs) -> Result<()> {
     let integ = Whitted::new(&scene, tracer.as_ref(), scene.plan());
     let mut tree = RayTree::default();
     let mut counters = Counters::default();
-    let mut rng = Rng::for_pixel(scene.seed, x, y);
+    let mut rng = Pcg32::for_pixel(scene.seed, x, y);
     let ray = scene.camera.ray(x as f32 + 0.5, y as f32 + 0.5);
     integ.trace_as(RayKind::Camera, &ray, 0, &mut rng, &mut counters, &mut tree);
     let root = tree.roots.first().ok_or_else(|| Error::Invalid("no ray was traced".into()))?;

@@ -9,7 +9,7 @@ pub use whitted::Whitted;
 use glam::Vec3;
 
 use crate::geometry::Ray;
-use crate::sampler::Rng;
+use crate::rng::Pcg32;
 
 /// Work counters: what a render actually did. Summed per row in a fixed
 /// order, so they are identical for any thread count.
@@ -46,5 +46,5 @@ impl Counters {
 /// Computes the colour seen along a ray.
 pub trait Integrator: Send + Sync {
     /// Colour arriving at the ray origin along `ray` (a camera ray: depth 0).
-    fn radiance(&self, ray: &Ray, rng: &mut Rng, counters: &mut Counters) -> Vec3;
+    fn radiance(&self, ray: &Ray, rng: &mut Pcg32, counters: &mut Counters) -> Vec3;
 }

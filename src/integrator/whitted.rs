@@ -11,7 +11,7 @@ use crate::geometry::offset::{self, SpawnOffset};
 use crate::geometry::{Hit, Ray};
 use crate::light::LightSample;
 use crate::material::Material;
-use crate::sampler::Rng;
+use crate::rng::Pcg32;
 use crate::scene::Scene;
 use crate::shading::{SurfacePoint, model};
 
@@ -149,7 +149,7 @@ impl<'a> Whitted<'a> {
         m: &Material,
         kd: Vec3,
         wo: Vec3,
-        rng: &mut Rng,
+        rng: &mut Pcg32,
         c: &mut Counters,
         rec: &mut R,
     ) -> Vec3 {
@@ -187,7 +187,7 @@ impl<'a> Whitted<'a> {
         m: &Material,
         d: Vec3,
         depth: u32,
-        rng: &mut Rng,
+        rng: &mut Pcg32,
         c: &mut Counters,
         rec: &mut R,
     ) -> Vec3 {
@@ -220,7 +220,7 @@ impl<'a> Whitted<'a> {
     }
 
     /// Radiance along `ray` at recursion depth `depth`.
-    pub fn trace(&self, ray: &Ray, depth: u32, rng: &mut Rng, c: &mut Counters) -> Vec3 {
+    pub fn trace(&self, ray: &Ray, depth: u32, rng: &mut Pcg32, c: &mut Counters) -> Vec3 {
         self.trace_as(RayKind::Camera, ray, depth, rng, c, &mut NoRecorder)
     }
 
@@ -230,7 +230,7 @@ impl<'a> Whitted<'a> {
         kind: RayKind,
         ray: &Ray,
         depth: u32,
-        rng: &mut Rng,
+        rng: &mut Pcg32,
         c: &mut Counters,
         rec: &mut R,
     ) -> Vec3 {
@@ -260,7 +260,7 @@ impl<'a> Whitted<'a> {
 }
 
 impl Integrator for Whitted<'_> {
-    fn radiance(&self, ray: &Ray, rng: &mut Rng, counters: &mut Counters) -> Vec3 {
+    fn radiance(&self, ray: &Ray, rng: &mut Pcg32, counters: &mut Counters) -> Vec3 {
         counters.primary_rays += 1;
         self.trace(ray, 0, rng, counters)
     }

@@ -10,7 +10,7 @@ pub use segment::SegmentLight;
 
 use glam::Vec3;
 
-use crate::sampler::Rng;
+use crate::rng::Pcg32;
 
 /// How positions on an area light are chosen.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -45,7 +45,7 @@ pub trait Light: Send + Sync + std::fmt::Debug {
 
     /// Call `f` with `n` samples (a point light gives exactly one, whatever `n`).
     /// A callback rather than a returned list: no allocation per shading point.
-    fn sample(&self, n: u32, sampling: LightSampling, rng: &mut Rng, f: &mut dyn FnMut(LightSample));
+    fn sample(&self, n: u32, sampling: LightSampling, rng: &mut Pcg32, f: &mut dyn FnMut(LightSample));
 
     /// Position at parametric coordinates `(u, v)` in `[0, 1]^2` (ignored by point lights).
     fn position_at(&self, u: f32, v: f32) -> Vec3;
@@ -55,7 +55,7 @@ pub trait Light: Send + Sync + std::fmt::Debug {
 }
 
 /// `n` 1D sample positions in `[0, 1)`: jittered strata or independent.
-pub(crate) fn samples_1d(n: u32, sampling: LightSampling, rng: &mut Rng, mut f: impl FnMut(f32)) {
+pub(crate) fn samples_1d(n: u32, sampling: LightSampling, rng: &mut Pcg32, mut f: impl FnMut(f32)) {
     for i in 0..n {
         let x = match sampling {
             LightSampling::Random => rng.next_f32(),

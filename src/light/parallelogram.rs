@@ -4,7 +4,7 @@
 use glam::Vec3;
 
 use super::{Light, LightSample, LightSampling};
-use crate::sampler::Rng;
+use crate::rng::Pcg32;
 
 /// A parallelogram light. Corner colours: `colors[0]` at `v0`, `[1]` at
 /// `v0 + edge01`, `[2]` at `v0 + edge02`, `[3]` at `v0 + edge01 + edge02`.
@@ -41,7 +41,7 @@ impl Light for ParallelogramLight {
     /// Jittered sampling uses a `k x k` grid with `k = ceil(sqrt(n))` (so
     /// `k^2 >= n` samples, as report 001 does); random sampling takes `n`
     /// independent points.
-    fn sample(&self, n: u32, sampling: LightSampling, rng: &mut Rng, f: &mut dyn FnMut(LightSample)) {
+    fn sample(&self, n: u32, sampling: LightSampling, rng: &mut Pcg32, f: &mut dyn FnMut(LightSample)) {
         let n = n.max(1);
         let normal = Some(self.normal());
         let mut push = |a: f32, b: f32, count: u32| {
@@ -101,7 +101,7 @@ mod tests {
         assert_eq!(l.color_at(1.0, 1.0), Vec3::ONE);
         assert_eq!(l.color_at(0.5, 0.5), Vec3::new(0.5, 0.5, 0.5));
         let mut out = Vec::new();
-        l.sample(10, LightSampling::Jittered, &mut Rng::new(1, 1), &mut |s| out.push(s));
+        l.sample(10, LightSampling::Jittered, &mut Pcg32::new(1, 1), &mut |s| out.push(s));
         assert_eq!(out.len(), 16);
         let total: f32 = out.iter().map(|s| s.measure).sum();
         assert!((total - 1.0).abs() < 1e-6);

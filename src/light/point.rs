@@ -3,7 +3,7 @@
 use glam::Vec3;
 
 use super::{Light, LightSample, LightSampling};
-use crate::sampler::Rng;
+use crate::rng::Pcg32;
 
 /// An isotropic point light.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -19,7 +19,7 @@ impl Light for PointLight {
         true
     }
 
-    fn sample(&self, _n: u32, _sampling: LightSampling, _rng: &mut Rng, f: &mut dyn FnMut(LightSample)) {
+    fn sample(&self, _n: u32, _sampling: LightSampling, _rng: &mut Pcg32, f: &mut dyn FnMut(LightSample)) {
         f(LightSample { position: self.position, color: self.color, average_weight: 1.0, measure: 1.0, normal: None });
     }
 

@@ -4,7 +4,7 @@
 use glam::Vec3;
 
 use super::{Light, LightSample, LightSampling, samples_1d};
-use crate::sampler::Rng;
+use crate::rng::Pcg32;
 
 /// A segment light from `p0` (colour `c0`) to `p1` (colour `c1`).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -24,7 +24,7 @@ impl Light for SegmentLight {
         false
     }
 
-    fn sample(&self, n: u32, sampling: LightSampling, rng: &mut Rng, f: &mut dyn FnMut(LightSample)) {
+    fn sample(&self, n: u32, sampling: LightSampling, rng: &mut Pcg32, f: &mut dyn FnMut(LightSample)) {
         let n = n.max(1);
         let measure = (self.p1 - self.p0).length() / n as f32;
         samples_1d(n, sampling, rng, |u| {
