@@ -16,36 +16,30 @@ use crate::accel::Tracer;
 use crate::geometry::offset::{offset_origin, sphere_point_error, triangle_point_error};
 use crate::geometry::{Aabb, Hit, Primitives, Ray};
 
-/// SplitMix64 (Steele, Lea, Flood 2014): a tiny, fast, well-mixed generator;
-/// enough for test data, and identical on every platform.
+/// The harness's random numbers: the project's PCG32 ([`crate::rng::Pcg32`],
+/// one stream per ray set) with the few extra draws ray generation needs.
 #[derive(Clone, Debug)]
-pub struct Rng(u64);
+pub struct Rng(crate::rng::Pcg32);
 
 impl Rng {
-    /// A generator with the given seed.
+    /// A generator with the given seed (stream 0).
     pub fn new(seed: u64) -> Self {
-        Self(seed)
+        Self(crate::rng::Pcg32::new(seed, 0))
     }
 
     /// A generator for stream `stream` of `seed` (independent sub-sequences per set).
     pub fn stream(seed: u64, stream: u64) -> Self {
-        let mut r = Self(seed ^ stream.wrapping_mul(0xD1B5_4A32_D192_ED03));
-        r.next_u64();
-        r
+        Self(crate::rng::Pcg32::new(seed, stream))
     }
 
     /// Next 64 random bits.
     pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        ((self.0.next_u32() as u64) << 32) | self.0.next_u32() as u64
     }
 
     /// Uniform in `[0, 1)` with 24 random bits.
     pub fn f32(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+        self.0.next_f32()
     }
 
     /// Uniform in `[0, 1)` with 53 random bits.
@@ -55,7 +49,7 @@ impl Rng {
 
     /// Uniform integer in `0..n` (`0 < n < 2^32`).
     pub fn below(&mut self, n: usize) -> usize {
-        (((self.next_u64() >> 32) * n as u64) >> 32) as usize
+        self.0.below(n as u32) as usize
     }
 
     /// Uniform direction on the unit sphere.
