@@ -3,7 +3,7 @@
 //! triangles at equal distance, where either primitive is a correct answer).
 #![cfg(feature = "embree")]
 
-use std::path::Path;
+mod common;
 
 use rtdiff::accel::{self, Backend, Tracer};
 use rtdiff::render::{RenderOptions, render};
@@ -39,13 +39,7 @@ const PRIMARY_TIE_FRACTION: f64 = 0.01;
 
 #[test]
 fn embree_and_native_images_agree_except_at_ties() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    let mut names: Vec<_> = std::fs::read_dir(&dir)
-        .unwrap()
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|e| e == "json"))
-        .collect();
-    names.sort();
+    let names = common::scene_files();
     for path in names {
         let ov = Overrides { width: Some(96), height: Some(96), spp: Some(1), ..Default::default() };
         let scene = Scene::load_with(&path, &ov).unwrap();

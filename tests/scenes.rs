@@ -2,7 +2,7 @@
 //! size), and shows something. Meshes under assets/ come from
 //! scripts/fetch-assets.sh (scripts/test.sh runs it first).
 
-use std::path::Path;
+mod common;
 
 use rtdiff::accel;
 use rtdiff::render::{RenderOptions, render};
@@ -10,13 +10,7 @@ use rtdiff::scene::{Overrides, Scene};
 
 #[test]
 fn every_scene_renders_with_its_defaults() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    let mut names: Vec<_> = std::fs::read_dir(&dir)
-        .unwrap()
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|e| e == "json"))
-        .collect();
-    names.sort();
+    let names = common::scene_files();
     assert!(names.len() >= 11, "expected the reference scene set, found {names:?}");
     for path in names {
         let ov = Overrides { width: Some(24), height: Some(24), ..Default::default() };

@@ -7,29 +7,23 @@ use crate::error::Result;
 use crate::harness::parity::{self, ParityOptions, Reference};
 use crate::harness::raysets::SetKind;
 
-/// Which ray sets to run.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum RaysArg {
-    /// Every set, plus the numerical stress report.
-    All,
-    /// Camera rays.
-    Primary,
-    /// Random origins and directions.
-    Incoherent,
-    /// From primary hits to the lights.
-    Shadow,
-    /// Aimed at shared edges.
-    Edges,
-    /// Aimed at closed vertices.
-    Vertices,
-    /// Nearly parallel to a face.
-    Grazing,
-    /// Directions with zero components.
-    Axis,
-    /// Leaving a surface.
-    Surface,
-    /// The scene scaled by 1e-4 and 1e5 and moved 1e4 away.
-    Scaled,
+/// `--rays`: one set, or `None` for `all` (every set plus the numerical stress report).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RaySelection(pub Option<SetKind>);
+
+fn parse_rays(s: &str) -> std::result::Result<RaySelection, String> {
+    use clap::ValueEnum;
+    if s == "all" {
+        return Ok(RaySelection(None));
+    }
+    SetKind::from_str(s, false).map(|k| RaySelection(Some(k))).map_err(|_| {
+        let names: Vec<String> = SetKind::value_variants()
+            .iter()
+            .filter_map(|v| v.to_possible_value())
+            .map(|p| p.get_name().to_string())
+            .collect();
+        format!("unknown ray set '{s}' (expected all, {})", names.join(", "))
+    })
 }
 
 /// Arguments of `rtdiff parity`.
@@ -37,9 +31,10 @@ pub enum RaysArg {
 pub struct ParityArgs {
     /// Scene: a scene .json file, or a Wavefront .obj mesh (normalised to the unit sphere).
     pub scene: PathBuf,
-    /// Ray set to run (`all` adds the numerical stress report).
-    #[arg(long, value_enum, default_value = "all")]
-    pub rays: RaysArg,
+    /// Ray set to run: all, primary, incoherent, shadow, edges, vertices, grazing, axis, surface, scaled
+    /// (`all` adds the numerical stress report).
+    #[arg(long, value_parser = parse_rays, default_value = "all")]
+    pub rays: RaySelection,
     /// Rays per set.
     #[arg(long, default_value_t = 100_000)]
     pub count: usize,
@@ -67,24 +62,16 @@ pub struct ParityArgs {
 /// Run `rtdiff parity`.
 pub fn run(args: &ParityArgs) -> Result<()> {
     let ctx = crate::harness::load_context(&args.scene)?;
-    let sets = match args.rays {
-        RaysArg::All => SetKind::ALL.to_vec(),
-        RaysArg::Primary => vec![SetKind::Primary],
-        RaysArg::Incoherent => vec![SetKind::Incoherent],
-        RaysArg::Shadow => vec![SetKind::Shadow],
-        RaysArg::Edges => vec![SetKind::Edges],
-        RaysArg::Vertices => vec![SetKind::Vertices],
-        RaysArg::Grazing => vec![SetKind::Grazing],
-        RaysArg::Axis => vec![SetKind::Axis],
-        RaysArg::Surface => vec![SetKind::Surface],
-        RaysArg::Scaled => vec![SetKind::Scaled],
+    let sets = match args.rays.0 {
+        None => SetKind::ALL.to_vec(),
+        Some(set) => vec![set],
     };
     let opts = ParityOptions {
         sets,
         count: args.count,
         seed: args.seed,
         reference: args.reference,
-        stress: args.rays == RaysArg::All,
+        stress: args.rays.0.is_none(),
         max_examples: args.examples,
         sweep_count: (args.sweep_count > 0).then_some(args.sweep_count),
         variants: if args.default_only {

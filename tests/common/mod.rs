@@ -14,6 +14,18 @@ use rtdiff::mesh::{Mesh, load_obj};
 use rtdiff::render::{RenderOptions, RenderResult, render};
 use rtdiff::rng::Pcg32;
 use rtdiff::scene::{Scene, SceneFile};
+/// Every scene file in `scenes/`, sorted.
+pub fn scene_files() -> Vec<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut names: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .collect();
+    names.sort();
+    names
+}
+
 /// A fresh temporary folder for one test.
 pub fn temp_dir(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("rtdiff-test-{}-{name}", std::process::id()));
