@@ -52,7 +52,7 @@ pub struct ParityArgs {
     pub default_only: bool,
     /// Rays per set for the builder x traversal variants other than the default
     /// `sah/fast` (which always sees every ray); 0 = all rays.
-    #[arg(long, default_value_t = 100_000)]
+    #[arg(long, default_value_t = 10_000)]
     pub sweep_count: usize,
     /// Disagreeing rays to print per set and tracer.
     #[arg(long, default_value_t = 3)]
