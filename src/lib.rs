@@ -9,10 +9,13 @@ pub mod accel;
 pub mod bvh;
 pub mod camera;
 pub mod cli;
+#[cfg(feature = "embree")]
+pub mod embree;
 pub mod error;
 pub mod features;
 pub mod film;
 pub mod geometry;
+pub mod harness;
 pub mod integrator;
 pub mod light;
 pub mod material;

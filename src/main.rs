@@ -20,6 +20,10 @@ enum Command {
     BvhStats(rtdiff::cli::bvh_stats::BvhStatsArgs),
     /// Time BVH builds and traversals (and Embree, when built with it) on primary, incoherent and shadow rays.
     Bench(rtdiff::cli::bench::BenchArgs),
+    /// Hit parity of every native builder x traversal against Embree or brute force.
+    Parity(rtdiff::cli::parity::ParityArgs),
+    /// Trace rays from a CSV file and write the hits as CSV.
+    Trace(rtdiff::cli::trace::TraceArgs),
 }
 
 fn main() {
@@ -29,6 +33,8 @@ fn main() {
         Command::Debug(a) => rtdiff::cli::debug::run(a),
         Command::BvhStats(a) => rtdiff::cli::bvh_stats::run(a),
         Command::Bench(a) => rtdiff::cli::bench::run(a),
+        Command::Parity(a) => rtdiff::cli::parity::run(a),
+        Command::Trace(a) => rtdiff::cli::trace::run(a),
     };
     if let Err(e) = result {
         eprintln!("rtdiff: error: {e}");

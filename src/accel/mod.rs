@@ -11,7 +11,7 @@ pub use config::{AccelConfig, Backend, Builder, EmbreeQuality, Traversal};
 
 use std::sync::Arc;
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::geometry::Primitives;
 
 use crate::geometry::{Hit, Ray};
@@ -33,7 +33,10 @@ pub fn build_tracer(prims: Arc<Primitives>, cfg: &AccelConfig) -> Result<Box<dyn
     match cfg.backend {
         Backend::Brute => Ok(Box::new(BruteForce::new(prims, cfg.triangle_test))),
         Backend::Native => Ok(Box::new(crate::bvh::BvhTracer::new(&prims, cfg))),
-        Backend::Embree => Err(Error::Invalid(
+        #[cfg(feature = "embree")]
+        Backend::Embree => Ok(Box::new(crate::embree::EmbreeTracer::new(prims, cfg.embree_quality)?)),
+        #[cfg(not(feature = "embree"))]
+        Backend::Embree => Err(crate::error::Error::Invalid(
             "this build has no Embree backend: run scripts/setup-embree.sh and build with --features embree".into(),
         )),
     }

@@ -159,5 +159,15 @@ fn watertight(ray: &Ray, wr: &WatertightRay, v0: Vec3, v1: Vec3, v2: Vec3) -> Op
     if !(t >= ray.t_min && t <= ray.t_max) {
         return None;
     }
+    // As in the reference: reject a distance not provably positive (pbrt-v4 6.8.7).
+    if t <= crate::geometry::triangle::watertight_t_error(
+        [ax, ay, az],
+        [bx, by, bz],
+        [cx, cy, cz],
+        [e0, e1, e2],
+        inv_det,
+    ) {
+        return None;
+    }
     Some((t, e1 * inv_det, e2 * inv_det))
 }

@@ -4,4 +4,6 @@
 pub mod bench;
 pub mod bvh_stats;
 pub mod debug;
+pub mod parity;
 pub mod render;
+pub mod trace;

@@ -1,0 +1,29 @@
+//! Links Intel Embree 4 when the `embree` feature is on.
+//!
+//! The library comes from `scripts/setup-embree.sh` (into `third_party/embree/lib`).
+//! An absolute rpath lets binaries, tests and doctests run without
+//! `LD_LIBRARY_PATH`. Without the feature this script does nothing.
+
+use std::path::PathBuf;
+
+fn main() {
+    println!("cargo:rerun-if-changed=build.rs");
+    println!("cargo:rerun-if-env-changed=CARGO_FEATURE_EMBREE");
+    if std::env::var_os("CARGO_FEATURE_EMBREE").is_none() {
+        return;
+    }
+    let root = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR"));
+    let lib = root.join("third_party").join("embree").join("lib");
+    let so = lib.join("libembree4.so");
+    println!("cargo:rerun-if-changed={}", so.display());
+    if !so.exists() {
+        eprintln!(
+            "error: the `embree` feature needs Intel Embree 4.4 in {}: run scripts/setup-embree.sh first",
+            lib.display()
+        );
+        panic!("Embree 4 library not found in {}: run scripts/setup-embree.sh first", lib.display());
+    }
+    println!("cargo:rustc-link-search=native={}", lib.display());
+    println!("cargo:rustc-link-lib=dylib=embree4");
+    println!("cargo:rustc-link-arg=-Wl,-rpath,{}", lib.display());
+}

@@ -1,0 +1,183 @@
+//! A committed Embree scene built from rtdiff's primitives.
+
+use crate::accel::EmbreeQuality;
+use crate::error::{Error, Result};
+use crate::geometry::{Aabb, Primitives};
+
+use super::{Device, ffi};
+
+/// Geometry id of the triangles (primitive id = triangle index).
+pub const TRIANGLE_GEOM_ID: u32 = 0;
+/// Geometry id of the spheres (`RTC_GEOMETRY_TYPE_SPHERE_POINT`; primitive id
+/// = sphere index, so rtdiff's global id is `triangles.len() + primID`).
+pub const SPHERE_GEOM_ID: u32 = 1;
+
+/// A committed, immutable Embree scene (`RTCScene`), always built with
+/// `RTC_SCENE_FLAG_ROBUST`.
+#[derive(Debug)]
+pub struct Scene {
+    raw: ffi::RTCScene,
+    device: Device,
+    quality: i32,
+}
+
+// SAFETY: a committed scene is only read (rtcIntersect1 / rtcOccluded1 /
+// rtcGetSceneBounds), which Embree documents as thread-safe; nothing mutates
+// it after `Scene::new` returns.
+unsafe impl Send for Scene {}
+// SAFETY: see `Send`.
+unsafe impl Sync for Scene {}
+
+fn quality_code(q: EmbreeQuality) -> i32 {
+    match q {
+        EmbreeQuality::Low => ffi::RTC_BUILD_QUALITY_LOW,
+        EmbreeQuality::Medium => ffi::RTC_BUILD_QUALITY_MEDIUM,
+        EmbreeQuality::High => ffi::RTC_BUILD_QUALITY_HIGH,
+    }
+}
+
+/// Owns an `RTCGeometry` until it is attached (released on every path).
+struct GeomGuard(ffi::RTCGeometry);
+
+impl Drop for GeomGuard {
+    fn drop(&mut self) {
+        // SAFETY: the handle came from rtcNewGeometry; after attaching, the
+        // scene holds its own reference, so releasing ours is always correct.
+        unsafe { ffi::rtcReleaseGeometry(self.0) };
+    }
+}
+
+impl Scene {
+    /// Build a scene over `prims` on `device` with build quality `quality`
+    /// and the robust flag. Triangles are geometry 0 (one vertex triple per
+    /// triangle, so ids and vertex order match rtdiff's exactly), spheres
+    /// geometry 1.
+    pub fn new(device: &Device, prims: &Primitives, quality: EmbreeQuality) -> Result<Self> {
+        let nt = prims.triangles.len();
+        let ns = prims.spheres.len();
+        if nt > (u32::MAX / 3) as usize || ns >= u32::MAX as usize {
+            return Err(Error::Invalid(format!("too many primitives for Embree ({nt} triangles, {ns} spheres)")));
+        }
+        // SAFETY: `device.raw()` is a live device.
+        let raw = unsafe { ffi::rtcNewScene(device.raw()) };
+        device.check("creating a scene")?;
+        if raw.is_null() {
+            return Err(Error::Invalid("Embree: rtcNewScene returned NULL".into()));
+        }
+        // Keep our own reference to the device for error checks.
+        let scene = Self { raw, device: device.clone(), quality: quality_code(quality) };
+        // SAFETY: `raw` is a live, uncommitted scene; flag and quality are valid enum values.
+        unsafe {
+            ffi::rtcSetSceneFlags(raw, ffi::RTC_SCENE_FLAG_ROBUST);
+            ffi::rtcSetSceneBuildQuality(raw, quality_code(quality));
+        }
+        device.check("setting scene flags and build quality")?;
+        if nt > 0 {
+            scene.attach_triangles(prims)?;
+        }
+        if ns > 0 {
+            scene.attach_spheres(prims)?;
+        }
+        // SAFETY: `raw` is a live scene whose geometries are committed.
+        unsafe { ffi::rtcCommitScene(raw) };
+        device.check("committing the scene (BVH build)")?;
+        Ok(scene)
+    }
+
+    fn new_geometry(&self, kind: i32) -> Result<GeomGuard> {
+        // SAFETY: live device; `kind` is a valid RTCGeometryType.
+        let g = unsafe { ffi::rtcNewGeometry(self.device.raw(), kind) };
+        self.device.check("creating a geometry")?;
+        if g.is_null() {
+            return Err(Error::Invalid("Embree: rtcNewGeometry returned NULL".into()));
+        }
+        Ok(GeomGuard(g))
+    }
+
+    /// Allocate an Embree-owned buffer of `count` items of `stride` bytes.
+    fn new_buffer(&self, g: &GeomGuard, kind: i32, format: i32, stride: usize, count: usize) -> Result<*mut u8> {
+        // SAFETY: live geometry; Embree allocates (and pads) the buffer itself.
+        let p = unsafe { ffi::rtcSetNewGeometryBuffer(g.0, kind, 0, format, stride, count) };
+        self.device.check("allocating a geometry buffer")?;
+        if p.is_null() {
+            return Err(Error::Invalid("Embree: rtcSetNewGeometryBuffer returned NULL".into()));
+        }
+        Ok(p.cast())
+    }
+
+    fn commit_and_attach(&self, g: GeomGuard, id: u32) -> Result<()> {
+        // SAFETY: live geometry and scene; `id` is unused in this scene; the
+        // quality is a valid RTCBuildQuality.
+        unsafe {
+            // Geometries default to MEDIUM; the scene's quality alone does not
+            // select the HIGH (spatial split) builder for their primitives.
+            ffi::rtcSetGeometryBuildQuality(g.0, self.quality);
+            ffi::rtcCommitGeometry(g.0);
+            ffi::rtcAttachGeometryByID(self.raw, g.0, id);
+        }
+        self.device.check("committing and attaching a geometry")
+    }
+
+    fn attach_triangles(&self, prims: &Primitives) -> Result<()> {
+        let nt = prims.triangles.len();
+        let g = self.new_geometry(ffi::RTC_GEOMETRY_TYPE_TRIANGLE)?;
+        let vb = self.new_buffer(&g, ffi::RTC_BUFFER_TYPE_VERTEX, ffi::RTC_FORMAT_FLOAT3, 12, 3 * nt)?;
+        // SAFETY: Embree returned a buffer of 3 * nt items of 12 bytes (f32 x 3),
+        // 16-byte aligned and exclusively ours until commit.
+        let verts = unsafe { std::slice::from_raw_parts_mut(vb.cast::<[f32; 3]>(), 3 * nt) };
+        for (i, t) in prims.triangles.iter().enumerate() {
+            for k in 0..3 {
+                verts[3 * i + k] = t.v[k].to_array();
+            }
+        }
+        let ib = self.new_buffer(&g, ffi::RTC_BUFFER_TYPE_INDEX, ffi::RTC_FORMAT_UINT3, 12, nt)?;
+        // SAFETY: as above, nt items of 3 x u32.
+        let idx = unsafe { std::slice::from_raw_parts_mut(ib.cast::<[u32; 3]>(), nt) };
+        for (i, tri) in idx.iter_mut().enumerate() {
+            let b = 3 * i as u32;
+            *tri = [b, b + 1, b + 2];
+        }
+        self.commit_and_attach(g, TRIANGLE_GEOM_ID)
+    }
+
+    fn attach_spheres(&self, prims: &Primitives) -> Result<()> {
+        let ns = prims.spheres.len();
+        let g = self.new_geometry(ffi::RTC_GEOMETRY_TYPE_SPHERE_POINT)?;
+        let vb = self.new_buffer(&g, ffi::RTC_BUFFER_TYPE_VERTEX, ffi::RTC_FORMAT_FLOAT4, 16, ns)?;
+        // SAFETY: Embree returned a buffer of ns items of 16 bytes (x, y, z, radius).
+        let pts = unsafe { std::slice::from_raw_parts_mut(vb.cast::<[f32; 4]>(), ns) };
+        for (p, s) in pts.iter_mut().zip(&prims.spheres) {
+            *p = [s.center.x, s.center.y, s.center.z, s.radius];
+        }
+        self.commit_and_attach(g, SPHERE_GEOM_ID)
+    }
+
+    /// The raw handle (valid while `self` lives).
+    pub fn raw(&self) -> ffi::RTCScene {
+        self.raw
+    }
+
+    /// The device the scene was built on.
+    pub fn device(&self) -> &Device {
+        &self.device
+    }
+
+    /// Bounds of the committed scene as Embree sees them.
+    pub fn bounds(&self) -> Result<Aabb> {
+        let mut b = ffi::RTCBounds::default();
+        // SAFETY: committed scene; `b` is a properly aligned RTCBounds.
+        unsafe { ffi::rtcGetSceneBounds(self.raw, &mut b) };
+        self.device.check("reading the scene bounds")?;
+        Ok(Aabb::new(
+            glam::Vec3::new(b.lower_x, b.lower_y, b.lower_z),
+            glam::Vec3::new(b.upper_x, b.upper_y, b.upper_z),
+        ))
+    }
+}
+
+impl Drop for Scene {
+    fn drop(&mut self) {
+        // SAFETY: `raw` came from rtcNewScene and is released exactly once.
+        unsafe { ffi::rtcReleaseScene(self.raw) };
+    }
+}
