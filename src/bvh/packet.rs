@@ -248,6 +248,13 @@ fn tri4_sse(p: &Tri4, ray: &Ray, wr: &WatertightRay) -> (u32, u32, [f32; PW], [f
         let t = _mm_mul_ps(t_scaled, inv_det);
         // Ordered comparisons: a NaN t fails both, as `!(t >= t_min && t <= t_max)` rejects it.
         let in_range = _mm_and_ps(_mm_cmpge_ps(t, _mm_set1_ps(ray.t_min)), _mm_cmple_ps(t, _mm_set1_ps(ray.t_max)));
+        let reject = _mm_or_ps(_mm_or_ps(_mm_and_ps(neg, pos), _mm_cmpeq_ps(det, z)), zero);
+        let ok = _mm_andnot_ps(reject, in_range);
+        let zero_mask = _mm_movemask_ps(zero) as u32;
+        if _mm_movemask_ps(ok) == 0 {
+            // Most packets are missed: skip the error bound and the stores.
+            return (0, zero_mask, [0.0; PW], [0.0; PW], [0.0; PW]);
+        }
         // The provably-positive-t check of `watertight_t_error` (pbrt-v4 6.8.7), same operation order.
         let sign = _mm_set1_ps(-0.0);
         let abs = |x: __m128| _mm_andnot_ps(sign, x);
@@ -278,13 +285,12 @@ fn tri4_sse(p: &Tri4, ray: &Ray, wr: &WatertightRay) -> (u32, u32, [f32; PW], [f
             abs(inv_det),
         );
         let not_positive = _mm_cmple_ps(t, t_err);
-        let reject = _mm_or_ps(_mm_or_ps(_mm_and_ps(neg, pos), _mm_cmpeq_ps(det, z)), _mm_or_ps(zero, not_positive));
-        let ok = _mm_andnot_ps(reject, in_range);
+        let ok = _mm_andnot_ps(not_positive, ok);
         let (mut ts, mut us, mut vs) = ([0.0f32; PW], [0.0f32; PW], [0.0f32; PW]);
         // Each array has room for 4 floats; storeu has no alignment requirement.
         _mm_storeu_ps(ts.as_mut_ptr(), t);
         _mm_storeu_ps(us.as_mut_ptr(), _mm_mul_ps(e1, inv_det));
         _mm_storeu_ps(vs.as_mut_ptr(), _mm_mul_ps(e2, inv_det));
-        (_mm_movemask_ps(ok) as u32, _mm_movemask_ps(zero) as u32, ts, us, vs)
+        (_mm_movemask_ps(ok) as u32, zero_mask, ts, us, vs)
     }
 }
