@@ -12,7 +12,7 @@ use glam::Vec3;
 use crate::geometry::triangle::WatertightRay;
 use crate::geometry::{Hit, Ray, TriangleTest};
 
-use super::packet::{Tri4, TriPackets, packets_for};
+use super::packet::TriPackets;
 use super::slab::{cull_bound, far_scale};
 use super::{BinaryBvh, LeafPrims, Node};
 
@@ -365,7 +365,10 @@ impl WideBvh {
             let (p, bytes) = if n == 0 {
                 (self.nodes.as_ptr().wrapping_add(c).cast::<i8>(), std::mem::size_of::<WideNode>())
             } else if let Some(pk) = &self.packets {
-                (pk.packets.as_ptr().wrapping_add(c).cast::<i8>(), packets_for(n as u32) * std::mem::size_of::<Tri4>())
+                (
+                    pk.packets.as_ptr().wrapping_add(c).cast::<i8>(),
+                    super::packet::packets_for(n as u32) * std::mem::size_of::<super::packet::Tri4>(),
+                )
             } else {
                 (
                     self.prims.entries.as_ptr().wrapping_add(c).cast::<i8>(),
