@@ -296,7 +296,9 @@ impl WideBvh {
         }
         let prims = bvh.prims;
         let packets = (prims.num_triangles as usize == prims.len()).then(|| {
-            let mut packets = TriPackets::default();
+            // Exact size up front: no reallocation copies of a many-megabyte array.
+            let total: usize = nodes.iter().flat_map(|n| n.count.iter()).map(|&c| super::packet::packets_for(c)).sum();
+            let mut packets = TriPackets { packets: Vec::with_capacity(total) };
             for node in &mut nodes {
                 for l in 0..WIDTH {
                     if node.count[l] > 0 {
