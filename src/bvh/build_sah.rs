@@ -16,8 +16,11 @@ use super::build::{BinaryBvh, BoxA, BuildInput, Split, Splitter, build_with};
 
 /// Cost of visiting one node, relative to [`INTERSECTION_COST`].
 pub const TRAVERSAL_COST: f32 = 1.0;
-/// Cost of one primitive intersection.
-pub const INTERSECTION_COST: f32 = 1.0;
+/// Cost of one primitive intersection. Below the traversal cost because the
+/// `fast` path tests a leaf's triangles four at a time (4-wide packets) while a
+/// node visit costs a cache miss: on dragon_87k, 0.35 beat 1.0 by about 1.1x
+/// (primary), 1.3x (incoherent) and 1.15x (shadow) with leaves of up to 8.
+pub const INTERSECTION_COST: f32 = 0.35;
 /// Nodes with more primitives than this are always split.
 pub const SAH_MAX_LEAF: usize = 8;
 /// Deepest level; only reachable on pathological input (the node then stays a large leaf).

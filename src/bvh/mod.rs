@@ -17,6 +17,7 @@ pub mod build_median;
 pub mod build_sah;
 pub mod build_sah_volume;
 pub mod node;
+pub mod packet;
 pub mod prims;
 pub mod rays;
 pub mod slab;

@@ -122,7 +122,7 @@ impl LeafPrims {
 /// [`crate::geometry::triangle::intersect_watertight`], operation for
 /// operation (so bit-identical), forced inline into the traversal loops.
 #[inline(always)]
-fn watertight(ray: &Ray, wr: &WatertightRay, v0: Vec3, v1: Vec3, v2: Vec3) -> Option<(f32, f32, f32)> {
+pub(crate) fn watertight(ray: &Ray, wr: &WatertightRay, v0: Vec3, v1: Vec3, v2: Vec3) -> Option<(f32, f32, f32)> {
     let [kx, ky, kz] = wr.k;
     let s = wr.s;
     let a = v0 - ray.origin;

@@ -12,6 +12,7 @@ use glam::Vec3;
 use crate::geometry::triangle::WatertightRay;
 use crate::geometry::{Hit, Ray, TriangleTest};
 
+use super::packet::TriPackets;
 use super::slab::{cull_bound, far_scale};
 use super::{BinaryBvh, LeafPrims, Node};
 
@@ -173,7 +174,7 @@ struct Entry {
 
 /// Nearest-first closest-hit traversal, generic over the box test.
 macro_rules! closest {
-    ($self:ident, $ray:ident, $test:ident, $box8:ident) => {{
+    ($self:ident, $ray:ident, $test:ident, $box8:ident, $leaf:ident) => {{
         let pre = WidePre::new($ray);
         let wr = WatertightRay::new($ray.dir);
         let mut r = *$ray;
@@ -217,7 +218,7 @@ macro_rules! closest {
                     cur = Entry { t, child: node.child[l], count: node.count[l] };
                     continue 'outer;
                 }
-            } else if $self.prims.intersect_leaf(cur.child, cur.count, &mut r, &wr, $test, &mut best) {
+            } else if $self.$leaf(cur.child, cur.count, &mut r, &wr, $test, &mut best) {
                 cull = cull_bound(r.t_max);
             }
             loop {
@@ -239,7 +240,7 @@ macro_rules! closest {
 
 /// Any-hit traversal, generic over the box test (no ordering needed).
 macro_rules! any_hit {
-    ($self:ident, $ray:ident, $test:ident, $box8:ident) => {{
+    ($self:ident, $ray:ident, $test:ident, $box8:ident, $leaf:ident) => {{
         let pre = WidePre::new($ray);
         let wr = WatertightRay::new($ray.dir);
         let cull = cull_bound($ray.t_max);
@@ -257,7 +258,7 @@ macro_rules! any_hit {
                 let l = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
                 if node.count[l] > 0 {
-                    if $self.prims.occluded_leaf(node.child[l], node.count[l], $ray, &wr, $test) {
+                    if $self.$leaf(node.child[l], node.count[l], $ray, &wr, $test) {
                         return true;
                     }
                 } else {
@@ -277,6 +278,10 @@ pub struct WideBvh {
     pub nodes: Vec<WideNode>,
     /// Primitives in leaf order (moved from the binary BVH).
     pub prims: LeafPrims,
+    /// When every primitive is a triangle: the leaves' triangles in 4-wide
+    /// packets, and leaf lanes of [`Self::nodes`] point at packets instead of
+    /// [`Self::prims`] entries (`count` is still the number of triangles).
+    pub packets: Option<TriPackets>,
     use_avx2: bool,
 }
 
@@ -289,7 +294,21 @@ impl WideBvh {
         if !bvh.nodes.is_empty() {
             collapse(&bvh.nodes, 0, &mut nodes);
         }
-        Self { nodes, prims: bvh.prims, use_avx2: avx2_available() }
+        let prims = bvh.prims;
+        let packets = (prims.num_triangles as usize == prims.len()).then(|| {
+            // Exact size up front: no reallocation copies of a many-megabyte array.
+            let total: usize = nodes.iter().flat_map(|n| n.count.iter()).map(|&c| super::packet::packets_for(c)).sum();
+            let mut packets = TriPackets { packets: Vec::with_capacity(total) };
+            for node in &mut nodes {
+                for l in 0..WIDTH {
+                    if node.count[l] > 0 {
+                        node.child[l] = packets.push_leaf(&prims, node.child[l], node.count[l]);
+                    }
+                }
+            }
+            packets
+        });
+        Self { nodes, prims, packets, use_avx2: avx2_available() }
     }
 
     /// Force the portable scalar box test (for testing it on AVX2 machines).
@@ -304,7 +323,8 @@ impl WideBvh {
 
     /// Memory held by nodes and primitives, in bytes.
     pub fn bytes(&self) -> usize {
-        self.nodes.len() * std::mem::size_of::<WideNode>() + self.prims.bytes()
+        self.nodes.len() * std::mem::size_of::<WideNode>()
+            + self.packets.as_ref().map_or_else(|| self.prims.bytes(), TriPackets::bytes)
     }
 
     /// Closest hit (ties: lowest primitive id).
@@ -346,14 +366,21 @@ impl WideBvh {
             let (c, n) = (node.child[l] as usize, node.count[l] as usize);
             let (p, bytes) = if n == 0 {
                 (self.nodes.as_ptr().wrapping_add(c).cast::<i8>(), std::mem::size_of::<WideNode>())
+            } else if let Some(pk) = &self.packets {
+                (
+                    pk.packets.as_ptr().wrapping_add(c).cast::<i8>(),
+                    super::packet::packets_for(n as u32) * std::mem::size_of::<super::packet::Tri4>(),
+                )
             } else {
                 (
                     self.prims.entries.as_ptr().wrapping_add(c).cast::<i8>(),
                     n * std::mem::size_of::<super::prims::LeafEntry>(),
                 )
             };
+            // Every cache line the range touches (it need not start on a line).
             let mut off = 0;
-            while off < bytes {
+            let end = (p as usize % 64) + bytes;
+            while off < end {
                 // SAFETY: prefetching is a hint and never faults, whatever the address.
                 unsafe { _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(off)) };
                 off += 64;
@@ -363,24 +390,79 @@ impl WideBvh {
         let _ = (node, mask);
     }
 
+    /// Portable closest-hit leaf test (packets or entries).
+    #[inline(always)]
+    fn leaf_closest_scalar(
+        &self,
+        first: u32,
+        count: u32,
+        ray: &mut Ray,
+        wr: &WatertightRay,
+        test: TriangleTest,
+        best: &mut Option<Hit>,
+    ) -> bool {
+        match &self.packets {
+            Some(pk) => pk.intersect_leaf_scalar(first, count, ray, wr, test, best),
+            None => self.prims.intersect_leaf(first, count, ray, wr, test, best),
+        }
+    }
+
+    /// Portable any-hit leaf test (packets or entries).
+    #[inline(always)]
+    fn leaf_occluded_scalar(&self, first: u32, count: u32, ray: &Ray, wr: &WatertightRay, test: TriangleTest) -> bool {
+        match &self.packets {
+            Some(pk) => pk.occluded_leaf_scalar(first, count, ray, wr, test),
+            None => self.prims.occluded_leaf(first, count, ray, wr, test),
+        }
+    }
+
+    /// SIMD closest-hit leaf test: packets with the watertight test go four
+    /// at a time, everything else through [`Self::leaf_closest_scalar`].
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn leaf_closest_simd(
+        &self,
+        first: u32,
+        count: u32,
+        ray: &mut Ray,
+        wr: &WatertightRay,
+        test: TriangleTest,
+        best: &mut Option<Hit>,
+    ) -> bool {
+        match &self.packets {
+            Some(pk) if test == TriangleTest::Watertight => pk.intersect_leaf_simd(first, count, ray, wr, best),
+            _ => self.leaf_closest_scalar(first, count, ray, wr, test, best),
+        }
+    }
+
+    /// SIMD any-hit leaf test (see [`Self::leaf_closest_simd`]).
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn leaf_occluded_simd(&self, first: u32, count: u32, ray: &Ray, wr: &WatertightRay, test: TriangleTest) -> bool {
+        match &self.packets {
+            Some(pk) if test == TriangleTest::Watertight => pk.occluded_leaf_simd(first, count, ray, wr),
+            _ => self.leaf_occluded_scalar(first, count, ray, wr, test),
+        }
+    }
+
     fn intersect_scalar(&self, ray: &Ray, test: TriangleTest) -> Option<Hit> {
-        closest!(self, ray, test, box8_portable)
+        closest!(self, ray, test, box8_portable, leaf_closest_scalar)
     }
 
     fn occluded_scalar(&self, ray: &Ray, test: TriangleTest) -> bool {
-        any_hit!(self, ray, test, box8_portable)
+        any_hit!(self, ray, test, box8_portable, leaf_occluded_scalar)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     fn intersect_avx2(&self, ray: &Ray, test: TriangleTest) -> Option<Hit> {
-        closest!(self, ray, test, box8_avx2)
+        closest!(self, ray, test, box8_avx2, leaf_closest_simd)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     fn occluded_avx2(&self, ray: &Ray, test: TriangleTest) -> bool {
-        any_hit!(self, ray, test, box8_avx2)
+        any_hit!(self, ray, test, box8_avx2, leaf_occluded_simd)
     }
 }
 

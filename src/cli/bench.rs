@@ -144,6 +144,23 @@ fn single_pool() -> Result<rayon::ThreadPool> {
     rayon::ThreadPoolBuilder::new().num_threads(1).build().map_err(|e| Error::Invalid(e.to_string()))
 }
 
+/// Embree builds on one device made with `"threads=1"` and kept alive (so no
+/// thread-pool start-up is timed): wall clock and CPU time of the calling
+/// thread, which does all the work with one thread.
+#[cfg(feature = "embree")]
+fn embree_single_thread_builds(prims: &Arc<Primitives>, runs: usize) -> Result<()> {
+    use crate::embree::{Device, EmbreeTracer};
+    let device = Device::new("threads=1")?;
+    for q in [EmbreeQuality::Low, EmbreeQuality::Medium, EmbreeQuality::High] {
+        let (cpu, r) = timed(runs, true, || EmbreeTracer::with_device(&device, prims.clone(), q).map(|_| ()));
+        r?;
+        let (wall, _) = timed(runs, false, || EmbreeTracer::with_device(&device, prims.clone(), q).map(|_| ()));
+        let name = format!("embree {} (threads=1; wall)", value_name(&q));
+        println!("{name:<32} {:>12.2} {:>12.2}", cpu * 1e3, wall * 1e3);
+    }
+    Ok(())
+}
+
 /// Run `rtdiff bench`.
 pub fn run(args: &BenchArgs) -> Result<()> {
     if args.runs == 0 || args.size == 0 {
@@ -228,6 +245,8 @@ fn bench_scene(args: &BenchArgs, prims: Arc<Primitives>) -> Result<()> {
             }
         }
     }
+    #[cfg(feature = "embree")]
+    embree_single_thread_builds(&prims, args.runs)?;
 
     // Ray sets: shadow rays start at the primary hits of the reference tracer.
     let reference = build_tracer(prims.clone(), &AccelConfig::default())?;

@@ -1,0 +1,296 @@
+//! Leaf triangles of the `fast` traversal in 4-wide structure-of-arrays
+//! packets ([`Tri4`]), intersected four at a time with SSE (inside the AVX2
+//! traversal) by the watertight test, lane for lane the same operations in the
+//! same order as [`crate::geometry::triangle::intersect_watertight`] (separate
+//! multiplies and subtractions, no fused multiply-add), so every lane's
+//! `t, u, v` are bit-identical to the scalar routine's. Lanes whose single
+//! precision edge function is exactly zero take the scalar routine (with its
+//! double-precision fallback) instead.
+//!
+//! The vertices are stored, not edges or a normal: the watertight test works
+//! on the vertices relative to the ray origin, and any precomputed quantity
+//! would change its rounding.
+
+use glam::Vec3;
+
+use crate::geometry::offset::gamma;
+use crate::geometry::triangle::{WatertightRay, intersect_moller_trumbore};
+use crate::geometry::{Hit, Ray, TriangleTest};
+
+use super::prims::{LeafPrims, watertight};
+
+/// Triangles per packet.
+pub const PW: usize = 4;
+
+/// Four triangles in structure-of-arrays form, 160 bytes.
+///
+/// Unused lanes of a leaf's last packet repeat its last triangle (same id), so
+/// they can never change the result and need no mask.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
+pub struct Tri4 {
+    /// Row `3 j + a`: coordinate `a` of vertex `j`, one lane per triangle.
+    pub v: [[f32; PW]; 9],
+    /// Original primitive ids.
+    pub id: [u32; PW],
+}
+
+const _: () = assert!(std::mem::size_of::<Tri4>() == 160);
+
+impl Tri4 {
+    /// Vertex `j` of lane `l`.
+    #[inline(always)]
+    fn vertex(&self, j: usize, l: usize) -> Vec3 {
+        Vec3::new(self.v[3 * j][l], self.v[3 * j + 1][l], self.v[3 * j + 2][l])
+    }
+}
+
+/// All leaves' triangles packed in packets: a leaf of `n` triangles occupies
+/// `ceil(n / 4)` consecutive packets.
+#[derive(Clone, Debug, Default)]
+pub struct TriPackets {
+    /// The packets.
+    pub packets: Vec<Tri4>,
+}
+
+/// Packets holding `count` triangles.
+#[inline(always)]
+pub fn packets_for(count: u32) -> usize {
+    (count as usize).div_ceil(PW)
+}
+
+impl TriPackets {
+    /// Append the triangles `first .. first + count` of `prims` (all
+    /// triangles) as packets; returns the index of the first packet.
+    pub fn push_leaf(&mut self, prims: &LeafPrims, first: u32, count: u32) -> u32 {
+        let start = self.packets.len() as u32;
+        let entries = &prims.entries[first as usize..(first + count) as usize];
+        for chunk in entries.chunks(PW) {
+            let mut p = Tri4 { v: [[0.0; PW]; 9], id: [0; PW] };
+            for l in 0..PW {
+                let e = &chunk[l.min(chunk.len() - 1)];
+                for j in 0..3 {
+                    for a in 0..3 {
+                        p.v[3 * j + a][l] = e.v[j][a];
+                    }
+                }
+                p.id[l] = e.id;
+            }
+            self.packets.push(p);
+        }
+        start
+    }
+
+    /// Memory held, in bytes.
+    pub fn bytes(&self) -> usize {
+        self.packets.len() * std::mem::size_of::<Tri4>()
+    }
+
+    /// Triangle `k` of the leaf starting at packet `first`: `(vertices, id)`.
+    #[inline(always)]
+    fn tri(&self, first: u32, k: usize) -> ([Vec3; 3], u32) {
+        let p = &self.packets[first as usize + k / PW];
+        let l = k % PW;
+        ([p.vertex(0, l), p.vertex(1, l), p.vertex(2, l)], p.id[l])
+    }
+
+    /// Scalar closest-hit test of a leaf (`count` triangles from packet
+    /// `first`), with [`LeafPrims::intersect_leaf`]'s tie rule and `t_max`
+    /// update. Returns true when `best` changed.
+    #[inline(always)]
+    pub fn intersect_leaf_scalar(
+        &self,
+        first: u32,
+        count: u32,
+        ray: &mut Ray,
+        wr: &WatertightRay,
+        test: TriangleTest,
+        best: &mut Option<Hit>,
+    ) -> bool {
+        let mut changed = false;
+        for k in 0..count as usize {
+            let ([a, b, c], id) = self.tri(first, k);
+            let hit = match test {
+                TriangleTest::Watertight => watertight(ray, wr, a, b, c),
+                TriangleTest::MollerTrumbore => intersect_moller_trumbore(ray, a, b, c),
+            };
+            if let Some((t, u, v)) = hit {
+                changed |= offer(best, ray, t, id, u, v);
+            }
+        }
+        changed
+    }
+
+    /// Scalar any-hit test of a leaf.
+    #[inline(always)]
+    pub fn occluded_leaf_scalar(
+        &self,
+        first: u32,
+        count: u32,
+        ray: &Ray,
+        wr: &WatertightRay,
+        test: TriangleTest,
+    ) -> bool {
+        (0..count as usize).any(|k| {
+            let ([a, b, c], _) = self.tri(first, k);
+            match test {
+                TriangleTest::Watertight => watertight(ray, wr, a, b, c).is_some(),
+                TriangleTest::MollerTrumbore => intersect_moller_trumbore(ray, a, b, c).is_some(),
+            }
+        })
+    }
+
+    /// SIMD watertight closest-hit test of a leaf; same results as
+    /// [`Self::intersect_leaf_scalar`] with [`TriangleTest::Watertight`].
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    pub fn intersect_leaf_simd(
+        &self,
+        first: u32,
+        count: u32,
+        ray: &mut Ray,
+        wr: &WatertightRay,
+        best: &mut Option<Hit>,
+    ) -> bool {
+        let mut changed = false;
+        for p in &self.packets[first as usize..first as usize + packets_for(count)] {
+            let (mut ok, zero, t, u, v) = tri4_sse(p, ray, wr);
+            let mut zero = zero;
+            while zero != 0 {
+                let l = zero.trailing_zeros() as usize;
+                zero &= zero - 1;
+                if let Some((t, u, v)) = watertight(ray, wr, p.vertex(0, l), p.vertex(1, l), p.vertex(2, l)) {
+                    changed |= offer(best, ray, t, p.id[l], u, v);
+                }
+            }
+            while ok != 0 {
+                let l = ok.trailing_zeros() as usize;
+                ok &= ok - 1;
+                changed |= offer(best, ray, t[l], p.id[l], u[l], v[l]);
+            }
+        }
+        changed
+    }
+
+    /// SIMD watertight any-hit test of a leaf.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    pub fn occluded_leaf_simd(&self, first: u32, count: u32, ray: &Ray, wr: &WatertightRay) -> bool {
+        for p in &self.packets[first as usize..first as usize + packets_for(count)] {
+            let (ok, mut zero, _, _, _) = tri4_sse(p, ray, wr);
+            if ok != 0 {
+                return true;
+            }
+            while zero != 0 {
+                let l = zero.trailing_zeros() as usize;
+                zero &= zero - 1;
+                if watertight(ray, wr, p.vertex(0, l), p.vertex(1, l), p.vertex(2, l)).is_some() {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+}
+
+/// Offer hit `(t, id, u, v)` (already within `ray`'s interval): it becomes the
+/// best when nearer, or equally near with a lower id; `ray.t_max` follows.
+#[inline(always)]
+fn offer(best: &mut Option<Hit>, ray: &mut Ray, t: f32, id: u32, u: f32, v: f32) -> bool {
+    if best.is_none_or(|b| t < b.t || (t == b.t && id < b.prim)) {
+        *best = Some(Hit { t, prim: id, u, v });
+        ray.t_max = t;
+        true
+    } else {
+        false
+    }
+}
+
+/// The watertight test on four lanes: `(hit mask, zero-edge mask, t, u, v)`.
+/// Lanes in the zero-edge mask (some edge function exactly 0 in single
+/// precision) are excluded from the hit mask and must be decided by the
+/// scalar routine.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn tri4_sse(p: &Tri4, ray: &Ray, wr: &WatertightRay) -> (u32, u32, [f32; PW], [f32; PW], [f32; PW]) {
+    use std::arch::x86_64::*;
+    // SAFETY: SSE and SSE2 are part of the x86_64 baseline, so these intrinsics are
+    // available on every x86_64 CPU; the loads and stores are justified where they occur.
+    unsafe {
+        let [kx, ky, kz] = wr.k;
+        // Each row is 16 bytes at a 16-byte multiple inside a 32-byte aligned packet: aligned loads are valid.
+        let ld = |r: usize| _mm_load_ps(p.v[r].as_ptr());
+        let (ox, oy, oz) = (_mm_set1_ps(ray.origin[kx]), _mm_set1_ps(ray.origin[ky]), _mm_set1_ps(ray.origin[kz]));
+        let (sx, sy, sz) = (_mm_set1_ps(wr.s.x), _mm_set1_ps(wr.s.y), _mm_set1_ps(wr.s.z));
+        // a = v0 - o, b = v1 - o, c = v2 - o on the permuted axes.
+        let (a_x, a_y, a_z) = (_mm_sub_ps(ld(kx), ox), _mm_sub_ps(ld(ky), oy), _mm_sub_ps(ld(kz), oz));
+        let (b_x, b_y, b_z) = (_mm_sub_ps(ld(3 + kx), ox), _mm_sub_ps(ld(3 + ky), oy), _mm_sub_ps(ld(3 + kz), oz));
+        let (c_x, c_y, c_z) = (_mm_sub_ps(ld(6 + kx), ox), _mm_sub_ps(ld(6 + ky), oy), _mm_sub_ps(ld(6 + kz), oz));
+        let ax = _mm_sub_ps(a_x, _mm_mul_ps(sx, a_z));
+        let ay = _mm_sub_ps(a_y, _mm_mul_ps(sy, a_z));
+        let bx = _mm_sub_ps(b_x, _mm_mul_ps(sx, b_z));
+        let by = _mm_sub_ps(b_y, _mm_mul_ps(sy, b_z));
+        let cx = _mm_sub_ps(c_x, _mm_mul_ps(sx, c_z));
+        let cy = _mm_sub_ps(c_y, _mm_mul_ps(sy, c_z));
+        let e0 = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
+        let e1 = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
+        let e2 = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
+        let z = _mm_setzero_ps();
+        let zero = _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(e0, z), _mm_cmpeq_ps(e1, z)), _mm_cmpeq_ps(e2, z));
+        let neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(e0, z), _mm_cmplt_ps(e1, z)), _mm_cmplt_ps(e2, z));
+        let pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(e0, z), _mm_cmpgt_ps(e1, z)), _mm_cmpgt_ps(e2, z));
+        let det = _mm_add_ps(_mm_add_ps(e0, e1), e2);
+        let az = _mm_mul_ps(sz, a_z);
+        let bz = _mm_mul_ps(sz, b_z);
+        let cz = _mm_mul_ps(sz, c_z);
+        let t_scaled = _mm_add_ps(_mm_add_ps(_mm_mul_ps(e0, az), _mm_mul_ps(e1, bz)), _mm_mul_ps(e2, cz));
+        let inv_det = _mm_div_ps(_mm_set1_ps(1.0), det);
+        let t = _mm_mul_ps(t_scaled, inv_det);
+        // Ordered comparisons: a NaN t fails both, as `!(t >= t_min && t <= t_max)` rejects it.
+        let in_range = _mm_and_ps(_mm_cmpge_ps(t, _mm_set1_ps(ray.t_min)), _mm_cmple_ps(t, _mm_set1_ps(ray.t_max)));
+        let reject = _mm_or_ps(_mm_or_ps(_mm_and_ps(neg, pos), _mm_cmpeq_ps(det, z)), zero);
+        let ok = _mm_andnot_ps(reject, in_range);
+        let zero_mask = _mm_movemask_ps(zero) as u32;
+        if _mm_movemask_ps(ok) == 0 {
+            // Most packets are missed: skip the error bound and the stores.
+            return (0, zero_mask, [0.0; PW], [0.0; PW], [0.0; PW]);
+        }
+        // The provably-positive-t check of `watertight_t_error` (pbrt-v4 6.8.7), same operation order.
+        let sign = _mm_set1_ps(-0.0);
+        let abs = |x: __m128| _mm_andnot_ps(sign, x);
+        // Operands are non-negative (no -0) and non-NaN wherever `t` passed the range test, so
+        // `maxps` agrees with `f32::max` on every lane that matters.
+        let max3 = |x: __m128, y: __m128, w: __m128| _mm_max_ps(_mm_max_ps(abs(x), abs(y)), abs(w));
+        let (max_xt, max_yt, max_zt) = (max3(ax, bx, cx), max3(ay, by, cy), max3(az, bz, cz));
+        let (g2, g3, g5) = (_mm_set1_ps(gamma(2)), _mm_set1_ps(gamma(3)), _mm_set1_ps(gamma(5)));
+        let delta_z = _mm_mul_ps(g3, max_zt);
+        let delta_x = _mm_mul_ps(g5, _mm_add_ps(max_xt, max_zt));
+        let delta_y = _mm_mul_ps(g5, _mm_add_ps(max_yt, max_zt));
+        let delta_e = _mm_mul_ps(
+            _mm_set1_ps(2.0),
+            _mm_add_ps(
+                _mm_add_ps(_mm_mul_ps(_mm_mul_ps(g2, max_xt), max_yt), _mm_mul_ps(delta_y, max_xt)),
+                _mm_mul_ps(delta_x, max_yt),
+            ),
+        );
+        let max_e = max3(e0, e1, e2);
+        let t_err = _mm_mul_ps(
+            _mm_mul_ps(
+                _mm_set1_ps(3.0),
+                _mm_add_ps(
+                    _mm_add_ps(_mm_mul_ps(_mm_mul_ps(g3, max_e), max_zt), _mm_mul_ps(delta_e, max_zt)),
+                    _mm_mul_ps(delta_z, max_e),
+                ),
+            ),
+            abs(inv_det),
+        );
+        let not_positive = _mm_cmple_ps(t, t_err);
+        let ok = _mm_andnot_ps(not_positive, ok);
+        let (mut ts, mut us, mut vs) = ([0.0f32; PW], [0.0f32; PW], [0.0f32; PW]);
+        // Each array has room for 4 floats; storeu has no alignment requirement.
+        _mm_storeu_ps(ts.as_mut_ptr(), t);
+        _mm_storeu_ps(us.as_mut_ptr(), _mm_mul_ps(e1, inv_det));
+        _mm_storeu_ps(vs.as_mut_ptr(), _mm_mul_ps(e2, inv_det));
+        (_mm_movemask_ps(ok) as u32, zero_mask, ts, us, vs)
+    }
+}
