@@ -119,55 +119,6 @@ impl LeafPrims {
     }
 }
 
-/// [`crate::geometry::triangle::intersect_watertight`], operation for
-/// operation (so bit-identical), forced inline into the traversal loops.
-#[inline(always)]
-pub(crate) fn watertight(ray: &Ray, wr: &WatertightRay, v0: Vec3, v1: Vec3, v2: Vec3) -> Option<(f32, f32, f32)> {
-    let [kx, ky, kz] = wr.k;
-    let s = wr.s;
-    let a = v0 - ray.origin;
-    let b = v1 - ray.origin;
-    let c = v2 - ray.origin;
-    let ax = a[kx] - s.x * a[kz];
-    let ay = a[ky] - s.y * a[kz];
-    let bx = b[kx] - s.x * b[kz];
-    let by = b[ky] - s.y * b[kz];
-    let cx = c[kx] - s.x * c[kz];
-    let cy = c[ky] - s.y * c[kz];
-    let mut e0 = cx * by - cy * bx;
-    let mut e1 = ax * cy - ay * cx;
-    let mut e2 = bx * ay - by * ax;
-    if e0 == 0.0 || e1 == 0.0 || e2 == 0.0 {
-        let (ax, ay, bx, by, cx, cy) = (ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64);
-        e0 = (cx * by - cy * bx) as f32;
-        e1 = (ax * cy - ay * cx) as f32;
-        e2 = (bx * ay - by * ax) as f32;
-    }
-    if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
-        return None;
-    }
-    let det = e0 + e1 + e2;
-    if det == 0.0 {
-        return None;
-    }
-    let az = s.z * a[kz];
-    let bz = s.z * b[kz];
-    let cz = s.z * c[kz];
-    let t_scaled = e0 * az + e1 * bz + e2 * cz;
-    let inv_det = 1.0 / det;
-    let t = t_scaled * inv_det;
-    if !(t >= ray.t_min && t <= ray.t_max) {
-        return None;
-    }
-    // As in the reference: reject a distance not provably positive (pbrt-v4 6.8.7).
-    if t <= crate::geometry::triangle::watertight_t_error(
-        [ax, ay, az],
-        [bx, by, bz],
-        [cx, cy, cz],
-        [e0, e1, e2],
-        inv_det,
-    ) {
-        return None;
-    }
-    Some((t, e1 * inv_det, e2 * inv_det))
-}
+/// The reference watertight test itself ([`crate::geometry::triangle::intersect_watertight`],
+/// declared `#[inline(always)]`): one implementation, so the traversals stay bit-identical to brute force.
+pub(crate) use crate::geometry::triangle::intersect_watertight as watertight;

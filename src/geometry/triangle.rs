@@ -78,7 +78,7 @@ impl WatertightRay {
 /// let hit = intersect_watertight(&r, &WatertightRay::new(r.dir), Vec3::ZERO, Vec3::X, Vec3::Y);
 /// assert_eq!(hit, Some((1.0, 0.25, 0.25)));
 /// ```
-#[inline]
+#[inline(always)]
 pub fn intersect_watertight(ray: &Ray, wr: &WatertightRay, v0: Vec3, v1: Vec3, v2: Vec3) -> Option<(f32, f32, f32)> {
     let [kx, ky, kz] = wr.k;
     let s = wr.s;
