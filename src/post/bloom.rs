@@ -41,33 +41,28 @@ pub fn gaussian_kernel(w: f32) -> Vec<f32> {
     k
 }
 
-/// Separable convolution with edge clamping.
-pub fn blur(img: &Image, kernel: &[f32]) -> Image {
+/// One 1D pass along x (`along_x`) or y, repeating the edge pixels.
+fn convolve_1d(img: &Image, kernel: &[f32], along_x: bool) -> Image {
     let (w, h) = (img.width as i64, img.height as i64);
     let half = (kernel.len() / 2) as i64;
-    let mut tmp = Image::new(img.width, img.height);
-    for y in 0..h {
-        for x in 0..w {
-            let mut s = Vec3::ZERO;
-            for (i, k) in kernel.iter().enumerate() {
-                let xx = (x + i as i64 - half).clamp(0, w - 1);
-                s += *k * img.pixels[(y * w + xx) as usize];
-            }
-            tmp.pixels[(y * w + x) as usize] = s;
-        }
-    }
     let mut out = Image::new(img.width, img.height);
     for y in 0..h {
         for x in 0..w {
             let mut s = Vec3::ZERO;
             for (i, k) in kernel.iter().enumerate() {
-                let yy = (y + i as i64 - half).clamp(0, h - 1);
-                s += *k * tmp.pixels[(yy * w + x) as usize];
+                let d = i as i64 - half;
+                let (xx, yy) = if along_x { ((x + d).clamp(0, w - 1), y) } else { (x, (y + d).clamp(0, h - 1)) };
+                s += *k * img.pixels[(yy * w + xx) as usize];
             }
             out.pixels[(y * w + x) as usize] = s;
         }
     }
     out
+}
+
+/// Separable convolution with edge clamping: rows, then columns.
+pub fn blur(img: &Image, kernel: &[f32]) -> Image {
+    convolve_1d(&convolve_1d(img, kernel, true), kernel, false)
 }
 
 /// Every stage of the bloom, for `--bloom-stages`.
