@@ -195,6 +195,16 @@ macro_rules! closest {
                         cur = Entry { t: near[first], child: node.child[first], count: node.count[first] };
                         continue 'outer;
                     }
+                    let second = mask.trailing_zeros() as usize;
+                    if mask & (mask - 1) == 0 {
+                        // Two hits (the common case): push the farther, visit the nearer.
+                        // Ties go to the lower lane, as in the insertion sort below.
+                        let (a, b) = if near[second] < near[first] { (second, first) } else { (first, second) };
+                        stack[sp] = MaybeUninit::new(Entry { t: near[b], child: node.child[b], count: node.count[b] });
+                        sp += 1;
+                        cur = Entry { t: near[a], child: node.child[a], count: node.count[a] };
+                        continue 'outer;
+                    }
                     // Sort the hit lanes by entry distance (insertion sort, at most 8).
                     let mut lanes = [(0.0f32, 0usize); WIDTH];
                     lanes[0] = (near[first], first);
