@@ -5,7 +5,7 @@
 
 use std::time::{Duration, Instant};
 
-use glam::Vec3A;
+use glam::{Vec3A, Vec4};
 use rayon::prelude::*;
 
 use crate::accel::Builder;
@@ -13,7 +13,8 @@ use crate::geometry::{Aabb, Primitives};
 
 use super::{LeafPrims, Node};
 
-/// Nodes with at least this many primitives build their two subtrees in parallel.
+/// Nodes with at least this many primitives build their two subtrees in
+/// parallel (when the rayon pool has more than one thread).
 const PARALLEL_THRESHOLD: usize = 4096;
 
 /// A box in SIMD-friendly form for the builders' inner loops.
@@ -55,30 +56,58 @@ impl BoxA {
     }
 }
 
-/// Per-primitive data the split strategies read.
+/// One primitive's bounding box and id, 32 bytes: the element the builders
+/// partition. Keeping the box next to the id (instead of an index into a
+/// box array) makes every binning and partition pass a sequential stream.
+#[derive(Clone, Copy, Debug)]
+#[repr(C)]
+pub struct PrimRef {
+    /// Lower corner in `x, y, z`; `w` holds the low 16 bits of the id as a float.
+    lo: Vec4,
+    /// Upper corner in `x, y, z`; `w` holds the high 16 bits of the id as a float.
+    hi: Vec4,
+}
+
+impl PrimRef {
+    /// The reference to primitive `id` with box `b`.
+    ///
+    /// The id is kept as two small integral floats rather than raw bits: the
+    /// SIMD box arithmetic also runs on the `w` lanes, and raw bits of small
+    /// ids are subnormal floats, which make that arithmetic many times slower.
+    #[inline(always)]
+    pub fn new(id: u32, b: BoxA) -> Self {
+        Self { lo: b.min.extend((id & 0xffff) as f32), hi: b.max.extend((id >> 16) as f32) }
+    }
+
+    /// Original primitive id.
+    #[inline(always)]
+    pub fn id(&self) -> u32 {
+        self.lo.w as u32 | ((self.hi.w as u32) << 16)
+    }
+
+    /// Bounding box.
+    #[inline(always)]
+    pub fn boxa(&self) -> BoxA {
+        BoxA { min: Vec3A::from_vec4(self.lo), max: Vec3A::from_vec4(self.hi) }
+    }
+
+    /// Centre of the bounding box (what the builders split on).
+    #[inline(always)]
+    pub fn centroid(&self) -> Vec3A {
+        (Vec3A::from_vec4(self.lo) + Vec3A::from_vec4(self.hi)) * 0.5
+    }
+}
+
+/// Per-primitive data some split strategies read, indexed by primitive id.
 pub struct BuildInput {
-    /// Bounding box of each primitive.
-    pub bounds: Vec<BoxA>,
-    /// Centre of each primitive's box.
-    pub centroids: Vec<Vec3A>,
     /// Mean of each triangle's vertices (a sphere's centre): the reports'
     /// "centroid". Only gathered for splitters that ask for it (else empty).
     pub vertex_means: Vec<Vec3A>,
 }
 
 impl BuildInput {
-    /// Boxes and centroids of every primitive (computed in parallel), and
-    /// vertex means when `vertex_means` is set.
+    /// Vertex means when `vertex_means` is set (computed in parallel).
     pub fn new(prims: &Primitives, vertex_means: bool) -> Self {
-        let bounds: Vec<BoxA> = (0..prims.len())
-            .into_par_iter()
-            .with_min_len(4096)
-            .map(|i| {
-                let b = prims.bounds(i);
-                BoxA { min: b.min.into(), max: b.max.into() }
-            })
-            .collect();
-        let centroids = bounds.par_iter().with_min_len(4096).map(|b| (b.min + b.max) * 0.5).collect();
         let nt = prims.triangles.len();
         let vertex_means = (0..if vertex_means { prims.len() } else { 0 })
             .into_par_iter()
@@ -92,20 +121,32 @@ impl BuildInput {
                 }
             })
             .collect();
-        Self { bounds, centroids, vertex_means }
+        Self { vertex_means }
     }
+}
 
-    /// Union of the boxes of `idx`.
-    #[inline]
-    pub fn bounds_of(&self, idx: &[u32]) -> Aabb {
-        idx.iter().fold(BoxA::EMPTY, |b, &i| b.union(self.bounds[i as usize])).aabb()
-    }
+/// A reference for every primitive, in id order (computed in parallel).
+pub fn prim_refs(prims: &Primitives) -> Vec<PrimRef> {
+    (0..prims.len())
+        .into_par_iter()
+        .with_min_len(4096)
+        .map(|i| {
+            let b = prims.bounds(i);
+            PrimRef::new(i as u32, BoxA { min: b.min.into(), max: b.max.into() })
+        })
+        .collect()
+}
 
-    /// Box around the centroids of `idx`.
-    #[inline]
-    pub fn centroid_bounds_of(&self, idx: &[u32]) -> BoxA {
-        idx.iter().fold(BoxA::EMPTY, |b, &i| b.grow(self.centroids[i as usize]))
-    }
+/// Union of the boxes of `refs`.
+#[inline]
+pub fn bounds_of(refs: &[PrimRef]) -> Aabb {
+    refs.iter().fold(BoxA::EMPTY, |b, r| b.union(r.boxa())).aabb()
+}
+
+/// Box around the centroids of `refs`.
+#[inline]
+pub fn centroid_bounds_of(refs: &[PrimRef]) -> BoxA {
+    refs.iter().fold(BoxA::EMPTY, |b, r| b.grow(r.centroid()))
 }
 
 /// A split strategy: the only part that differs between builders.
@@ -118,15 +159,15 @@ pub trait Splitter: Sync {
         false
     }
 
-    /// Reorder `idx` (the primitives of a node with box `bounds` at level
-    /// `depth`) and return `m` with `0 < m < idx.len()` to split it into
-    /// `idx[..m]` and `idx[m..]`, or `None` to make the node a leaf. May also
+    /// Reorder `refs` (the primitives of a node with box `bounds` at level
+    /// `depth`) and return `m` with `0 < m < refs.len()` to split it into
+    /// `refs[..m]` and `refs[m..]`, or `None` to make the node a leaf. May also
     /// return the exact boxes of the two sides when it has them.
     /// `centroids` is the box around the node's centroids when the parent's split computed it.
     fn split(
         &self,
         input: &BuildInput,
-        idx: &mut [u32],
+        refs: &mut [PrimRef],
         bounds: &Aabb,
         centroids: Option<BoxA>,
         depth: u32,
@@ -162,25 +203,40 @@ pub struct BinaryBvh {
     pub build_time: Duration,
 }
 
+/// A built tree before the primitives are gathered: the flattened nodes and
+/// the primitive ids in leaf order (leaf ranges index into `order`).
+pub struct BuiltTree {
+    /// Depth-first nodes; node 0 is the root. Empty when there are no primitives.
+    pub nodes: Vec<Node>,
+    /// Primitive ids in leaf order.
+    pub order: Vec<u32>,
+}
+
 /// Run `splitter` over `prims` and flatten the result.
+pub fn build_tree(prims: &Primitives, splitter: &dyn Splitter) -> BuiltTree {
+    let input = BuildInput::new(prims, splitter.needs_vertex_means());
+    let mut refs = prim_refs(prims);
+    let mut nodes = Vec::with_capacity(2 * prims.len().max(1));
+    if !refs.is_empty() {
+        let root = bounds_of(&refs);
+        build_node(splitter, &input, &mut refs, root, None, 0, 0, &mut nodes);
+    }
+    BuiltTree { nodes, order: refs.iter().map(PrimRef::id).collect() }
+}
+
+/// Run `splitter` over `prims`, flatten the result and gather the primitives in leaf order.
 pub fn build_with(prims: &Primitives, splitter: &dyn Splitter, builder: Builder) -> BinaryBvh {
     let start = Instant::now();
-    let input = BuildInput::new(prims, splitter.needs_vertex_means());
-    let mut idx: Vec<u32> = (0..prims.len() as u32).collect();
-    let mut nodes = Vec::with_capacity(2 * prims.len().max(1));
-    if !idx.is_empty() {
-        let root = input.bounds_of(&idx);
-        build_node(splitter, &input, &mut idx, root, None, 0, 0, &mut nodes);
-    }
-    let leaf_prims = LeafPrims::new(prims, &idx);
-    BinaryBvh { nodes, prims: leaf_prims, builder, build_time: start.elapsed() }
+    let tree = build_tree(prims, splitter);
+    let leaf_prims = LeafPrims::new(prims, &tree.order);
+    BinaryBvh { nodes: tree.nodes, prims: leaf_prims, builder, build_time: start.elapsed() }
 }
 
 #[allow(clippy::too_many_arguments)]
 fn build_node(
     s: &dyn Splitter,
     input: &BuildInput,
-    idx: &mut [u32],
+    idx: &mut [PrimRef],
     bounds: Aabb,
     centroids: Option<BoxA>,
     first: u32,
@@ -200,9 +256,10 @@ fn build_node(
     let (lc, rc) = child_cb.map_or((None, None), |(l, r)| (Some(l), Some(r)));
     assert!(mid > 0 && mid < n, "split strategy returned an empty side");
     let (l, r) = idx.split_at_mut(mid);
-    let (lb, rb) = child_bounds.unwrap_or_else(|| (input.bounds_of(l), input.bounds_of(r)));
+    let (lb, rb) = child_bounds.unwrap_or_else(|| (bounds_of(l), bounds_of(r)));
     let right_first = first + mid as u32;
-    if n >= PARALLEL_THRESHOLD {
+    // On a one-thread pool the fork would only add copies of the subtrees.
+    if n >= PARALLEL_THRESHOLD && rayon::current_num_threads() > 1 {
         let (lv, rv) = rayon::join(
             || {
                 let mut v = Vec::with_capacity(2 * l.len());
@@ -235,11 +292,11 @@ fn append_shifted(out: &mut Vec<Node>, sub: &[Node]) {
 
 /// Move the entries of `idx` satisfying `left` to the front; returns how many there are.
 #[inline]
-pub fn partition(idx: &mut [u32], mut left: impl FnMut(u32) -> bool) -> usize {
+pub fn partition<T>(idx: &mut [T], mut left: impl FnMut(&T) -> bool) -> usize {
     let mut i = 0;
     let mut j = idx.len();
     while i < j {
-        if left(idx[i]) {
+        if left(&idx[i]) {
             i += 1;
         } else {
             j -= 1;

@@ -6,7 +6,7 @@
 use crate::accel::Builder;
 use crate::geometry::{Aabb, Primitives};
 
-use super::build::{BinaryBvh, BoxA, BuildInput, Split, Splitter, build_with};
+use super::build::{BinaryBvh, BoxA, BuildInput, PrimRef, Split, Splitter, build_with};
 
 /// The reports' maximum tree level.
 pub const MEDIAN_MAX_DEPTH: u32 = 100;
@@ -24,8 +24,8 @@ impl Splitter for MedianSplit {
 
     fn split(
         &self,
-        input: &BuildInput,
-        idx: &mut [u32],
+        _input: &BuildInput,
+        idx: &mut [PrimRef],
         _bounds: &Aabb,
         _centroids: Option<BoxA>,
         depth: u32,
@@ -35,10 +35,11 @@ impl Splitter for MedianSplit {
         }
         let axis = (depth % 3) as usize;
         let mid = idx.len() / 2;
-        let c = &input.centroids;
         // Ties on the coordinate are broken by primitive id, as the reports kept
         // the indices "to differentiate between triangles with the same centroid".
-        idx.select_nth_unstable_by(mid, |&a, &b| c[a as usize][axis].total_cmp(&c[b as usize][axis]).then(a.cmp(&b)));
+        idx.select_nth_unstable_by(mid, |a, b| {
+            a.centroid()[axis].total_cmp(&b.centroid()[axis]).then(a.id().cmp(&b.id()))
+        });
         Some(mid.into())
     }
 }

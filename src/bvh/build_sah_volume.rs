@@ -12,7 +12,7 @@
 use crate::accel::Builder;
 use crate::geometry::{Aabb, Primitives};
 
-use super::build::{BinaryBvh, BoxA, BuildInput, Split, Splitter, build_with, partition};
+use super::build::{BinaryBvh, BoxA, BuildInput, PrimRef, Split, Splitter, build_with, partition};
 
 /// The reports' bin count.
 pub const VOLUME_BINS: usize = 5;
@@ -35,7 +35,7 @@ impl Splitter for VolumeSplit {
     fn split(
         &self,
         input: &BuildInput,
-        idx: &mut [u32],
+        idx: &mut [PrimRef],
         bounds: &Aabb,
         _centroids: Option<BoxA>,
         _depth: u32,
@@ -46,16 +46,16 @@ impl Splitter for VolumeSplit {
         if length <= 0.0 {
             return None;
         }
-        let bin = |i: u32| -> usize {
-            let c = input.vertex_means[i as usize][axis];
+        let bin = |r: &PrimRef| -> usize {
+            let c = input.vertex_means[r.id() as usize][axis];
             (((c - low) * VOLUME_BINS as f32 / length) as usize).min(VOLUME_BINS - 1)
         };
         let mut count = [0usize; VOLUME_BINS];
         let mut boxes = [Aabb::EMPTY; VOLUME_BINS];
-        for &i in idx.iter() {
-            let b = bin(i);
+        for r in idx.iter() {
+            let b = bin(r);
             count[b] += 1;
-            boxes[b] = boxes[b].union(input.bounds[i as usize].aabb());
+            boxes[b] = boxes[b].union(r.boxa().aabb());
         }
         let n = idx.len();
         let mut best_cost = n as f32 * bounds.volume();
@@ -76,7 +76,7 @@ impl Splitter for VolumeSplit {
             }
         }
         let (s, _, bl, br) = best?;
-        Some(Split { mid: partition(idx, |i| bin(i) <= s), bounds: Some((bl, br)), centroids: None })
+        Some(Split { mid: partition(idx, |r| bin(r) <= s), bounds: Some((bl, br)), centroids: None })
     }
 }
 

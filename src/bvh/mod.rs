@@ -41,11 +41,22 @@ use crate::geometry::{Hit, Primitives, Ray, TriangleTest};
 /// Build a binary BVH over `prims` with the builder and parameters of `cfg`
 /// (`leaf_size` for `median`, `bins` for `sah`).
 pub fn build_binary(prims: &Primitives, cfg: &AccelConfig) -> BinaryBvh {
+    build::build_with(prims, splitter(cfg).as_ref(), cfg.builder)
+}
+
+/// The split strategy of `cfg`'s builder.
+fn splitter(cfg: &AccelConfig) -> Box<dyn build::Splitter> {
     match cfg.builder {
-        Builder::Median => build_median::build(prims, cfg.leaf_size),
-        Builder::SahVolume => build_sah_volume::build(prims),
-        Builder::Sah => build_sah::build(prims, cfg.bins),
+        Builder::Median => Box::new(build_median::MedianSplit { leaf_size: cfg.leaf_size }),
+        Builder::SahVolume => Box::new(build_sah_volume::VolumeSplit),
+        Builder::Sah => Box::new(build_sah::SahSplit { bins: cfg.bins }),
     }
+}
+
+/// Build the tree `cfg` asks for and collapse it into the 8-wide BVH of the
+/// `fast` traversal, gathering the leaves' triangles straight into packets.
+pub fn build_wide(prims: &Primitives, cfg: &AccelConfig) -> WideBvh {
+    WideBvh::from_tree(prims, &build::build_tree(prims, splitter(cfg).as_ref()))
 }
 
 /// Build the binary BVH `cfg` asks for and its 8-wide collapse, and gather
@@ -78,9 +89,11 @@ pub struct BvhTracer {
 impl BvhTracer {
     /// Build the BVH `cfg` asks for (the `fast` traversal also collapses it to 8-wide nodes).
     pub fn new(prims: &Primitives, cfg: &AccelConfig) -> Self {
-        let bin = build_binary(prims, cfg);
-        let tree =
-            if cfg.traversal == Traversal::Fast { Tree::Wide(WideBvh::from_binary(bin)) } else { Tree::Binary(bin) };
+        let tree = if cfg.traversal == Traversal::Fast {
+            Tree::Wide(build_wide(prims, cfg))
+        } else {
+            Tree::Binary(build_binary(prims, cfg))
+        };
         Self { tree, builder: cfg.builder, traversal: cfg.traversal, test: cfg.triangle_test }
     }
 

@@ -63,18 +63,26 @@ impl TriPackets {
     /// Append the triangles `first .. first + count` of `prims` (all
     /// triangles) as packets; returns the index of the first packet.
     pub fn push_leaf(&mut self, prims: &LeafPrims, first: u32, count: u32) -> u32 {
+        self.push_leaf_with(first, count, |k| (prims.entries[k].v, prims.entries[k].id))
+    }
+
+    /// Append the leaf triangles `first .. first + count`, where `tri(k)`
+    /// gives the vertices and id of leaf slot `k`, as packets; returns the
+    /// index of the first packet.
+    #[inline]
+    pub fn push_leaf_with(&mut self, first: u32, count: u32, tri: impl Fn(usize) -> ([Vec3; 3], u32)) -> u32 {
         let start = self.packets.len() as u32;
-        let entries = &prims.entries[first as usize..(first + count) as usize];
-        for chunk in entries.chunks(PW) {
+        let (first, count) = (first as usize, count as usize);
+        for c in (0..count).step_by(PW) {
             let mut p = Tri4 { v: [[0.0; PW]; 9], id: [0; PW] };
             for l in 0..PW {
-                let e = &chunk[l.min(chunk.len() - 1)];
-                for j in 0..3 {
+                let (v, id) = tri(first + (c + l).min(count - 1));
+                for (j, vj) in v.iter().enumerate() {
                     for a in 0..3 {
-                        p.v[3 * j + a][l] = e.v[j][a];
+                        p.v[3 * j + a][l] = vj[a];
                     }
                 }
-                p.id[l] = e.id;
+                p.id[l] = id;
             }
             self.packets.push(p);
         }

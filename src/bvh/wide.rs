@@ -10,8 +10,9 @@ use std::mem::MaybeUninit;
 use glam::Vec3;
 
 use crate::geometry::triangle::WatertightRay;
-use crate::geometry::{Hit, Ray, TriangleTest};
+use crate::geometry::{Hit, Primitives, Ray, TriangleTest};
 
+use super::build::BuiltTree;
 use super::packet::TriPackets;
 use super::slab::{cull_bound, far_scale};
 use super::{BinaryBvh, LeafPrims, Node};
@@ -174,7 +175,7 @@ struct Entry {
 
 /// Nearest-first closest-hit traversal, generic over the box test.
 macro_rules! closest {
-    ($self:ident, $ray:ident, $test:ident, $box8:ident, $leaf:ident) => {{
+    ($self:ident, $ray:ident, $test:ident, $box8:ident, $leaf:ident, $counts:expr) => {{
         let pre = WidePre::new($ray);
         let wr = WatertightRay::new($ray.dir);
         let mut r = *$ray;
@@ -186,6 +187,7 @@ macro_rules! closest {
         'outer: loop {
             if cur.count == 0 {
                 let node = &$self.nodes[cur.child as usize];
+                $counts.node();
                 let (mut mask, near) = $box8!(node, &pre, cull);
                 if mask != 0 {
                     $self.prefetch_children(node, mask);
@@ -228,7 +230,10 @@ macro_rules! closest {
                     cur = Entry { t, child: node.child[l], count: node.count[l] };
                     continue 'outer;
                 }
-            } else if $self.$leaf(cur.child, cur.count, &mut r, &wr, $test, &mut best) {
+            } else if {
+                $counts.leaf(cur.count);
+                $self.$leaf(cur.child, cur.count, &mut r, &wr, $test, &mut best)
+            } {
                 cull = cull_bound(r.t_max);
             }
             loop {
@@ -281,6 +286,45 @@ macro_rules! any_hit {
     }};
 }
 
+/// Work done by closest-hit traversals, summed over rays.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TraversalCounts {
+    /// Rays traced.
+    pub rays: u64,
+    /// Wide nodes whose eight boxes were tested.
+    pub nodes: u64,
+    /// Leaves whose primitives were tested.
+    pub leaves: u64,
+    /// Leaf packets tested (4 triangles each).
+    pub packets: u64,
+}
+
+/// What the traversal reports as it goes: nothing in production, counts in
+/// [`WideBvh::intersect_counted`].
+trait Count {
+    fn node(&mut self);
+    fn leaf(&mut self, count: u32);
+}
+
+impl Count for () {
+    #[inline(always)]
+    fn node(&mut self) {}
+    #[inline(always)]
+    fn leaf(&mut self, _: u32) {}
+}
+
+impl Count for TraversalCounts {
+    #[inline(always)]
+    fn node(&mut self) {
+        self.nodes += 1;
+    }
+    #[inline(always)]
+    fn leaf(&mut self, count: u32) {
+        self.leaves += 1;
+        self.packets += super::packet::packets_for(count) as u64;
+    }
+}
+
 /// A wide BVH sharing the reordered primitives of the binary BVH it came from.
 #[derive(Clone, Debug)]
 pub struct WideBvh {
@@ -300,25 +344,30 @@ impl WideBvh {
     /// children and repeatedly opens the inner child of largest surface area
     /// until it has eight children or only leaves.
     pub fn from_binary(bvh: BinaryBvh) -> Self {
-        let mut nodes = Vec::with_capacity(bvh.nodes.len() / 4 + 1);
-        if !bvh.nodes.is_empty() {
-            collapse(&bvh.nodes, 0, &mut nodes);
-        }
+        let mut nodes = collapse_all(&bvh.nodes);
         let prims = bvh.prims;
-        let packets = (prims.num_triangles as usize == prims.len()).then(|| {
-            // Exact size up front: no reallocation copies of a many-megabyte array.
-            let total: usize = nodes.iter().flat_map(|n| n.count.iter()).map(|&c| super::packet::packets_for(c)).sum();
-            let mut packets = TriPackets { packets: Vec::with_capacity(total) };
-            for node in &mut nodes {
-                for l in 0..WIDTH {
-                    if node.count[l] > 0 {
-                        node.child[l] = packets.push_leaf(&prims, node.child[l], node.count[l]);
-                    }
-                }
-            }
-            packets
-        });
+        let packets = (prims.num_triangles as usize == prims.len())
+            .then(|| pack(&mut nodes, |k| (prims.entries[k].v, prims.entries[k].id)));
         Self { nodes, prims, packets, use_avx2: avx2_available() }
+    }
+
+    /// [`Self::from_binary`] for a tree whose primitives are not gathered yet:
+    /// triangle meshes go straight from `prims` into packets (no intermediate
+    /// [`LeafPrims`]); scenes with spheres gather [`LeafPrims`] instead.
+    pub fn from_tree(prims: &Primitives, tree: &BuiltTree) -> Self {
+        let mut nodes = collapse_all(&tree.nodes);
+        let num_triangles = prims.triangles.len() as u32;
+        if prims.spheres.is_empty() {
+            let packets = pack(&mut nodes, |k| {
+                let id = tree.order[k];
+                (prims.triangles[id as usize].v, id)
+            });
+            let prims = LeafPrims { entries: Vec::new(), num_triangles };
+            Self { nodes, prims, packets: Some(packets), use_avx2: avx2_available() }
+        } else {
+            let prims = LeafPrims::new(prims, &tree.order);
+            Self { nodes, prims, packets: None, use_avx2: avx2_available() }
+        }
     }
 
     /// Force the portable scalar box test (for testing it on AVX2 machines).
@@ -339,15 +388,27 @@ impl WideBvh {
 
     /// Closest hit (ties: lowest primitive id).
     pub fn intersect(&self, ray: &Ray, test: TriangleTest) -> Option<Hit> {
+        self.intersect_counting(ray, test, &mut ())
+    }
+
+    /// [`Self::intersect`] that also counts the work it does into `counts`
+    /// (the same traversal; the counting is compiled out of `intersect`).
+    pub fn intersect_counted(&self, ray: &Ray, test: TriangleTest, counts: &mut TraversalCounts) -> Option<Hit> {
+        counts.rays += 1;
+        self.intersect_counting(ray, test, counts)
+    }
+
+    #[inline(always)]
+    fn intersect_counting<C: Count>(&self, ray: &Ray, test: TriangleTest, counts: &mut C) -> Option<Hit> {
         if self.nodes.is_empty() {
             return None;
         }
         #[cfg(target_arch = "x86_64")]
         if self.use_avx2 {
             // SAFETY: use_avx2 is only set when the CPU reports AVX2.
-            return unsafe { self.intersect_avx2(ray, test) };
+            return unsafe { self.intersect_avx2(ray, test, counts) };
         }
-        self.intersect_scalar(ray, test)
+        self.intersect_scalar(ray, test, counts)
     }
 
     /// True when anything is hit within the ray's interval.
@@ -455,8 +516,8 @@ impl WideBvh {
         }
     }
 
-    fn intersect_scalar(&self, ray: &Ray, test: TriangleTest) -> Option<Hit> {
-        closest!(self, ray, test, box8_portable, leaf_closest_scalar)
+    fn intersect_scalar<C: Count>(&self, ray: &Ray, test: TriangleTest, counts: &mut C) -> Option<Hit> {
+        closest!(self, ray, test, box8_portable, leaf_closest_scalar, counts)
     }
 
     fn occluded_scalar(&self, ray: &Ray, test: TriangleTest) -> bool {
@@ -465,8 +526,8 @@ impl WideBvh {
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn intersect_avx2(&self, ray: &Ray, test: TriangleTest) -> Option<Hit> {
-        closest!(self, ray, test, box8_avx2, leaf_closest_simd)
+    fn intersect_avx2<C: Count>(&self, ray: &Ray, test: TriangleTest, counts: &mut C) -> Option<Hit> {
+        closest!(self, ray, test, box8_avx2, leaf_closest_simd, counts)
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -485,6 +546,31 @@ fn avx2_available() -> bool {
     {
         false
     }
+}
+
+/// The 8-wide collapse of binary `nodes` (empty for an empty tree).
+fn collapse_all(bin: &[Node]) -> Vec<WideNode> {
+    let mut nodes = Vec::with_capacity(bin.len() / 4 + 1);
+    if !bin.is_empty() {
+        collapse(bin, 0, &mut nodes);
+    }
+    nodes
+}
+
+/// Pack every leaf lane's triangles (`tri(k)` gives leaf slot `k`) into
+/// packets and point the lanes at their first packet.
+fn pack(nodes: &mut [WideNode], tri: impl Fn(usize) -> ([Vec3; 3], u32)) -> TriPackets {
+    // Exact size up front: no reallocation copies of a many-megabyte array.
+    let total: usize = nodes.iter().flat_map(|n| n.count.iter()).map(|&c| super::packet::packets_for(c)).sum();
+    let mut packets = TriPackets { packets: Vec::with_capacity(total) };
+    for node in nodes {
+        for l in 0..WIDTH {
+            if node.count[l] > 0 {
+                node.child[l] = packets.push_leaf_with(node.child[l], node.count[l], &tri);
+            }
+        }
+    }
+    packets
 }
 
 fn collapse(bin: &[Node], i: usize, out: &mut Vec<WideNode>) -> u32 {

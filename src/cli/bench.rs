@@ -46,6 +46,11 @@ pub struct BenchArgs {
     /// Bins per axis for the sah builder.
     #[arg(long, default_value_t = 16)]
     pub bins: usize,
+    /// Instead of the tables: race sah/fast against Embree MEDIUM for this
+    /// many interleaved rounds on one thread and report the median ratios
+    /// (needs `--features embree`).
+    #[arg(long, value_name = "ROUNDS")]
+    pub race: Option<usize>,
 }
 
 /// The benchmark's point light.
@@ -107,16 +112,17 @@ fn thread_cpu_seconds() -> Option<f64> {
 
 /// A stopwatch: the thread's CPU time for single-threaded work (when the
 /// platform has it), wall-clock time otherwise.
-struct Clock {
-    cpu: bool,
+pub(crate) struct Clock {
+    /// Measure CPU time of the calling thread instead of wall-clock time.
+    pub(crate) cpu: bool,
 }
 
 impl Clock {
-    fn now(&self) -> (Instant, Option<f64>) {
+    pub(crate) fn now(&self) -> (Instant, Option<f64>) {
         (Instant::now(), if self.cpu { thread_cpu_seconds() } else { None })
     }
 
-    fn since(&self, start: (Instant, Option<f64>)) -> f64 {
+    pub(crate) fn since(&self, start: (Instant, Option<f64>)) -> f64 {
         match (start.1, if self.cpu { thread_cpu_seconds() } else { None }) {
             (Some(a), Some(b)) => b - a,
             _ => start.0.elapsed().as_secs_f64(),
@@ -140,7 +146,7 @@ fn timed<T>(runs: usize, cpu_time: bool, mut f: impl FnMut() -> T) -> (f64, T) {
     (median(times), first)
 }
 
-fn single_pool() -> Result<rayon::ThreadPool> {
+pub(crate) fn single_pool() -> Result<rayon::ThreadPool> {
     rayon::ThreadPoolBuilder::new().num_threads(1).build().map_err(|e| Error::Invalid(e.to_string()))
 }
 
@@ -188,6 +194,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
 }
 
 fn bench_scene(args: &BenchArgs, prims: Arc<Primitives>) -> Result<()> {
+    if let Some(rounds) = args.race {
+        return race_scene(args, &prims, rounds);
+    }
     let one = single_pool()?;
     let builders = if args.builder.is_empty() {
         vec![Builder::Median, Builder::SahVolume, Builder::Sah]
@@ -250,14 +259,11 @@ fn bench_scene(args: &BenchArgs, prims: Arc<Primitives>) -> Result<()> {
 
     // Ray sets: shadow rays start at the primary hits of the reference tracer.
     let reference = build_tracer(prims.clone(), &AccelConfig::default())?;
-    let primary = Camera::scene_default().rays(args.size, args.size);
-    let hits: Vec<Option<Hit>> = primary.par_iter().map(|r| reference.intersect(r)).collect();
-    let shadow = shadow_rays(&prims, &primary, &hits, LIGHT, SpawnOffset::Robust);
-    let sets = RaySets { primary, incoherent: incoherent_rays(&prims.world_bounds(), args.incoherent, 2024), shadow };
+    let (sets, n_hit) = ray_sets(args, &prims, reference.as_ref());
     println!(
         "\nrays: primary {} ({} hit), incoherent {}, shadow {} (towards {LIGHT})",
         sets.primary.len(),
-        hits.iter().filter(|h| h.is_some()).count(),
+        n_hit,
         sets.incoherent.len(),
         sets.shadow.len()
     );
@@ -313,6 +319,37 @@ fn bench_scene(args: &BenchArgs, prims: Arc<Primitives>) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The three ray sets of a scene: primary rays from the default camera,
+/// incoherent rays, and shadow rays from the primary hits towards [`LIGHT`].
+fn ray_sets(args: &BenchArgs, prims: &Arc<Primitives>, reference: &dyn Tracer) -> (RaySets, usize) {
+    let primary = Camera::scene_default().rays(args.size, args.size);
+    let hits: Vec<Option<Hit>> = primary.par_iter().map(|r| reference.intersect(r)).collect();
+    let shadow = shadow_rays(prims, &primary, &hits, LIGHT, SpawnOffset::Robust);
+    let n_hit = hits.iter().filter(|h| h.is_some()).count();
+    (RaySets { primary, incoherent: incoherent_rays(&prims.world_bounds(), args.incoherent, 2024), shadow }, n_hit)
+}
+
+#[cfg(feature = "embree")]
+fn race_scene(args: &BenchArgs, prims: &Arc<Primitives>, rounds: usize) -> Result<()> {
+    if rounds == 0 {
+        return Err(Error::Invalid("--race needs at least one round".into()));
+    }
+    let reference = build_tracer(prims.clone(), &AccelConfig::default())?;
+    let (sets, _) = ray_sets(args, prims, reference.as_ref());
+    super::race::race(
+        prims,
+        &[("primary", &sets.primary, false), ("incoherent", &sets.incoherent, false), ("shadow", &sets.shadow, true)],
+        rounds,
+    )
+}
+
+#[cfg(not(feature = "embree"))]
+fn race_scene(_: &BenchArgs, _: &Arc<Primitives>, _: usize) -> Result<()> {
+    Err(Error::Invalid(
+        "--race needs the Embree backend: run scripts/setup-embree.sh and build with --features embree".into(),
+    ))
 }
 
 fn value_name<T: clap::ValueEnum>(v: &T) -> String {

@@ -1,0 +1,34 @@
+//! Deterministic traversal work of the `fast` path: wide-node visits, leaf
+//! visits and packet tests per ray, on the `rtdiff bench` primary and
+//! incoherent rays. Unlike timings, these counts do not depend on the
+//! machine's load, so they compare tree layouts and build parameters exactly.
+//!
+//! `cargo run --release --example traversal_counts -- [mesh.obj]`
+
+use rtdiff::accel::{AccelConfig, Builder};
+use rtdiff::bvh::rays::{Camera, incoherent_rays};
+use rtdiff::bvh::wide::TraversalCounts;
+use rtdiff::geometry::TriangleTest;
+
+fn main() -> rtdiff::Result<()> {
+    let path = std::env::args().nth(1).unwrap_or_else(|| "assets/dragon_87k.obj".into());
+    let prims = rtdiff::cli::bvh_stats::load_primitives(std::path::Path::new(&path), true)?;
+    let cfg = AccelConfig { builder: Builder::Sah, ..Default::default() };
+    let bvh = rtdiff::bvh::build_wide(&prims, &cfg);
+    println!("{path}: {} primitives, {} wide nodes", prims.len(), bvh.nodes.len());
+    println!("{:<12} {:>10} {:>10} {:>12} {:>14}", "rays", "nodes/ray", "leaves/ray", "packets/ray", "packets/leaf");
+    let sets = [
+        ("primary", Camera::scene_default().rays(512, 512)),
+        ("incoherent", incoherent_rays(&prims.world_bounds(), 262_144, 2024)),
+    ];
+    for (name, rays) in sets {
+        let mut c = TraversalCounts::default();
+        for r in &rays {
+            bvh.intersect_counted(r, TriangleTest::Watertight, &mut c);
+        }
+        let per = |x: u64| x as f64 / c.rays as f64;
+        let ppl = c.packets as f64 / c.leaves.max(1) as f64;
+        println!("{name:<12} {:>10.3} {:>10.3} {:>12.3} {:>14.3}", per(c.nodes), per(c.leaves), per(c.packets), ppl);
+    }
+    Ok(())
+}
