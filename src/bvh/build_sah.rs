@@ -101,6 +101,7 @@ thread_local! {
         std::cell::RefCell::new(Scratch {
             count: Vec::new(),
             boxes: Vec::new(),
+            soa: Vec::new(),
             right_area: Vec::new(),
             right_count: Vec::new(),
         })
@@ -113,28 +114,56 @@ struct Scratch {
     count: Vec<UVec4>,
     /// Box of each bin.
     boxes: Vec<BoxA>,
+    /// The bins transposed for the sweeps.
+    soa: Vec<Transposed>,
     /// Per bin `s`, lane `a`: half area of the union of bins `s..` of axis `a`.
     right_area: Vec<Vec3A>,
-    /// Per bin `s`, lane `a`: primitives in bins `s..` of axis `a`.
-    right_count: Vec<UVec4>,
+    /// Per bin `s`, lane `a`: primitives in bins `s..` of axis `a`, in whole blocks.
+    right_count: Vec<Vec3A>,
 }
 
-/// `n` rounded up to whole blocks of [`BLOCK`], per lane.
+/// `n` rounded up to whole blocks of [`BLOCK`], per lane, as floats.
 #[inline(always)]
-fn block_slots(n: UVec4) -> UVec4 {
+fn block_slots(n: UVec4) -> Vec3A {
     const { assert!(BLOCK.is_power_of_two()) };
     let shift = BLOCK.trailing_zeros();
-    ((n + UVec4::splat(BLOCK as u32 - 1)) >> shift) << shift
+    Vec3A::from_vec4((((n + UVec4::splat(BLOCK as u32 - 1)) >> shift) << shift).as_vec4())
 }
 
-/// Half surface areas of three boxes, one per lane.
-#[inline(always)]
-fn half_area3(b: &[BoxA; 3]) -> Vec3A {
-    let e = b.map(|b| (b.max - b.min).max(Vec3A::ZERO));
-    let x = Vec3A::new(e[0].x, e[1].x, e[2].x);
-    let y = Vec3A::new(e[0].y, e[1].y, e[2].y);
-    let z = Vec3A::new(e[0].z, e[1].z, e[2].z);
-    x * y + y * z + z * x
+/// Three boxes (one bin of each axis) transposed: `lo[c]` and `hi[c]` hold
+/// coordinate `c` of the three boxes' corners, box `a` in lane `a`.
+#[derive(Clone, Copy)]
+struct Transposed {
+    lo: [Vec3A; 3],
+    hi: [Vec3A; 3],
+}
+
+impl Transposed {
+    const EMPTY: Transposed = Transposed { lo: [Vec3A::INFINITY; 3], hi: [Vec3A::NEG_INFINITY; 3] };
+
+    /// Transpose the three boxes `b[0..3]`.
+    #[inline(always)]
+    fn of(b: &[BoxA]) -> Self {
+        let t = |f: fn(&BoxA) -> Vec3A, c: usize| Vec3A::new(f(&b[0])[c], f(&b[1])[c], f(&b[2])[c]);
+        Self {
+            lo: [t(|b| b.min, 0), t(|b| b.min, 1), t(|b| b.min, 2)],
+            hi: [t(|b| b.max, 0), t(|b| b.max, 1), t(|b| b.max, 2)],
+        }
+    }
+
+    /// Lane-wise union.
+    #[inline(always)]
+    fn union(&self, o: &Transposed) -> Self {
+        Self { lo: [0, 1, 2].map(|c| self.lo[c].min(o.lo[c])), hi: [0, 1, 2].map(|c| self.hi[c].max(o.hi[c])) }
+    }
+
+    /// Half surface area of each lane's box (0 for an empty box): the same
+    /// arithmetic as [`BoxA::half_area`], lane by lane.
+    #[inline(always)]
+    fn half_area(&self) -> Vec3A {
+        let [x, y, z] = [0, 1, 2].map(|c| (self.hi[c] - self.lo[c]).max(Vec3A::ZERO));
+        x * y + y * z + z * x
+    }
 }
 
 impl SahSplit {
@@ -151,7 +180,7 @@ impl SahSplit {
     ) -> Option<Split> {
         let n = idx.len();
         let last = nb as u32 - 1;
-        let Scratch { count, boxes, right_area, right_count } = scratch;
+        let Scratch { count, boxes, soa, right_area, right_count } = scratch;
         count.clear();
         count.resize(nb, UVec4::ZERO);
         boxes.clear();
@@ -159,7 +188,9 @@ impl SahSplit {
         right_area.clear();
         right_area.resize(nb, Vec3A::ZERO);
         right_count.clear();
-        right_count.resize(nb, UVec4::ZERO);
+        right_count.resize(nb, Vec3A::ZERO);
+        soa.clear();
+        soa.resize(nb, Transposed::EMPTY);
         let lastf = Vec3A::splat(last as f32);
         let (count, boxes) = (&mut count[..nb], &mut boxes[..3 * nb]);
         for r in idx.iter() {
@@ -175,42 +206,36 @@ impl SahSplit {
             }
         }
 
-        // Best split: minimise A_l N_l + A_r N_r (the constant terms of the cost
-        // do not change the argmin), the three axes at once, one per lane.
-        let mut rb = [BoxA::EMPTY; 3];
+        // Best split: minimise A_l B(N_l) + A_r B(N_r) (the constant terms of
+        // the cost do not change the argmin), the three axes at once, one per
+        // lane: the bins are transposed so that each coordinate of the three
+        // axes' boxes sits in one vector.
+        for (k, t) in soa[..nb].iter_mut().enumerate() {
+            *t = Transposed::of(&boxes[3 * k..3 * k + 3]);
+        }
+        let mut run = Transposed::EMPTY;
         let mut rn = UVec4::ZERO;
         for s in (1..nb).rev() {
-            for (a, rb) in rb.iter_mut().enumerate() {
-                *rb = rb.union(boxes[3 * s + a]);
-            }
+            run = run.union(&soa[s]);
             rn += count[s];
-            right_area[s] = half_area3(&rb);
-            right_count[s] = rn;
+            right_area[s] = run.half_area();
+            right_count[s] = block_slots(rn);
         }
         // Axes whose centroids all coincide cannot be split.
         let axis_ok = scale.cmpgt(Vec3A::ZERO);
         let mut best_cost = Vec3A::INFINITY;
-        let mut best_bin = UVec4::ZERO;
-        let mut lb = [BoxA::EMPTY; 3];
+        let mut best_bin = Vec3A::ZERO;
+        let mut run = Transposed::EMPTY;
         let mut ln = UVec4::ZERO;
         for s in 0..nb - 1 {
-            for (a, lb) in lb.iter_mut().enumerate() {
-                *lb = lb.union(boxes[3 * s + a]);
-            }
+            run = run.union(&soa[s]);
             ln += count[s];
-            let rn = right_count[s + 1];
-            let cost = half_area3(&lb) * Vec3A::from_vec4(block_slots(ln).as_vec4())
-                + right_area[s + 1] * Vec3A::from_vec4(block_slots(rn).as_vec4());
+            let (lb, rb) = (block_slots(ln), right_count[s + 1]);
+            let cost = run.half_area() * lb + right_area[s + 1] * rb;
             // Both sides non-empty, and strictly cheaper: the first minimum per axis wins.
-            let both = ln.cmpne(UVec4::ZERO) & rn.cmpne(UVec4::ZERO);
-            let better = cost.cmplt(best_cost) & axis_ok & glam::BVec3A::new(both.test(0), both.test(1), both.test(2));
+            let better = cost.cmplt(best_cost) & axis_ok & lb.cmpgt(Vec3A::ZERO) & rb.cmpgt(Vec3A::ZERO);
             best_cost = Vec3A::select(better, cost, best_cost);
-            let m = better.bitmask();
-            best_bin = UVec4::select(
-                glam::BVec4::new(m & 1 != 0, m & 2 != 0, m & 4 != 0, false),
-                UVec4::splat(s as u32),
-                best_bin,
-            );
+            best_bin = Vec3A::select(better, Vec3A::splat(s as f32), best_bin);
         }
         // Lowest axis among the cheapest (the order of a sequential search).
         let (mut axis, mut cost) = (usize::MAX, f32::INFINITY);
