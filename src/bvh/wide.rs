@@ -78,6 +78,10 @@ impl WideNode {
 struct WidePre {
     o: Vec3,
     inv: Vec3,
+    /// `inv * far_scale()`: the far distances `(b - o) * inv_far` take four
+    /// roundings, as `((b - o) * inv) * far_scale()` does, so they keep the
+    /// same conservative bound with one multiply fewer per slab.
+    inv_far: Vec3,
     /// Row of `WideNode::b` holding the near plane of each axis.
     near_row: [usize; 3],
     /// Row holding the far plane.
@@ -93,6 +97,7 @@ impl WidePre {
         Self {
             o: ray.origin,
             inv,
+            inv_far: inv * far_scale(),
             near_row: [0, 1, 2].map(|a| a + 3 * neg[a] as usize),
             far_row: [0, 1, 2].map(|a| a + 3 * (!neg[a]) as usize),
             t_min: ray.t_min,
@@ -100,20 +105,20 @@ impl WidePre {
     }
 }
 
-/// Scalar 8-lane box test: hit mask and entry distances (same arithmetic as
-/// [`super::slab::RayPre::hit`]).
+/// Scalar 8-lane box test: hit mask and entry distances (the arithmetic of
+/// [`super::slab::RayPre::hit`], with the far scale folded into the
+/// reciprocal; see [`WidePre::inv_far`]).
 #[inline(always)]
 fn box8_scalar(n: &WideNode, p: &WidePre, cull: f32) -> (u32, [f32; WIDTH]) {
-    let s = far_scale();
     let mut mask = 0;
     let mut near = [0.0; WIDTH];
     for (l, near_l) in near.iter_mut().enumerate() {
         let tn_x = (n.b[p.near_row[0]][l] - p.o.x) * p.inv.x;
         let tn_y = (n.b[p.near_row[1]][l] - p.o.y) * p.inv.y;
         let tn_z = (n.b[p.near_row[2]][l] - p.o.z) * p.inv.z;
-        let tf_x = (n.b[p.far_row[0]][l] - p.o.x) * p.inv.x * s;
-        let tf_y = (n.b[p.far_row[1]][l] - p.o.y) * p.inv.y * s;
-        let tf_z = (n.b[p.far_row[2]][l] - p.o.z) * p.inv.z * s;
+        let tf_x = (n.b[p.far_row[0]][l] - p.o.x) * p.inv_far.x;
+        let tf_y = (n.b[p.far_row[1]][l] - p.o.y) * p.inv_far.y;
+        let tf_z = (n.b[p.far_row[2]][l] - p.o.z) * p.inv_far.z;
         let tn = tn_x.max(tn_y).max(tn_z).max(p.t_min);
         let tf = tf_x.min(tf_y).min(tf_z).min(cull);
         *near_l = tn;
@@ -139,15 +144,15 @@ macro_rules! box8_avx2 {
         let ix = _mm256_set1_ps(p.inv.x);
         let iy = _mm256_set1_ps(p.inv.y);
         let iz = _mm256_set1_ps(p.inv.z);
-        let s = _mm256_set1_ps(far_scale());
+        let (fx, fy, fz) = (_mm256_set1_ps(p.inv_far.x), _mm256_set1_ps(p.inv_far.y), _mm256_set1_ps(p.inv_far.z));
         // SAFETY: each row is 32 bytes inside a 64-byte aligned node, so aligned loads are valid.
         let ld = |row: usize| unsafe { _mm256_load_ps(n.b[row].as_ptr()) };
         let tn_x = _mm256_mul_ps(_mm256_sub_ps(ld(p.near_row[0]), ox), ix);
         let tn_y = _mm256_mul_ps(_mm256_sub_ps(ld(p.near_row[1]), oy), iy);
         let tn_z = _mm256_mul_ps(_mm256_sub_ps(ld(p.near_row[2]), oz), iz);
-        let tf_x = _mm256_mul_ps(_mm256_mul_ps(_mm256_sub_ps(ld(p.far_row[0]), ox), ix), s);
-        let tf_y = _mm256_mul_ps(_mm256_mul_ps(_mm256_sub_ps(ld(p.far_row[1]), oy), iy), s);
-        let tf_z = _mm256_mul_ps(_mm256_mul_ps(_mm256_sub_ps(ld(p.far_row[2]), oz), iz), s);
+        let tf_x = _mm256_mul_ps(_mm256_sub_ps(ld(p.far_row[0]), ox), fx);
+        let tf_y = _mm256_mul_ps(_mm256_sub_ps(ld(p.far_row[1]), oy), fy);
+        let tf_z = _mm256_mul_ps(_mm256_sub_ps(ld(p.far_row[2]), oz), fz);
         let tn = _mm256_max_ps(tn_x, _mm256_max_ps(tn_y, _mm256_max_ps(tn_z, _mm256_set1_ps(p.t_min))));
         let tf = _mm256_min_ps(tf_x, _mm256_min_ps(tf_y, _mm256_min_ps(tf_z, _mm256_set1_ps($cull))));
         let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
@@ -208,25 +213,28 @@ macro_rules! closest {
                         continue 'outer;
                     }
                     // Sort the hit lanes by entry distance (insertion sort, at most 8).
-                    let mut lanes = [(0.0f32, 0usize); WIDTH];
-                    lanes[0] = (near[first], first);
+                    // Ties keep the lower lane first.
+                    let mut lanes = [(0.0f32, 0u32); WIDTH];
+                    lanes[0] = (near[first], first as u32);
                     let mut k = 1;
                     while mask != 0 {
-                        let l = mask.trailing_zeros() as usize;
+                        let l = mask.trailing_zeros();
                         mask &= mask - 1;
+                        let t = near[l as usize];
                         let mut j = k;
-                        while j > 0 && lanes[j - 1].0 > near[l] {
+                        while j > 0 && lanes[j - 1].0 > t {
                             lanes[j] = lanes[j - 1];
                             j -= 1;
                         }
-                        lanes[j] = (near[l], l);
+                        lanes[j] = (t, l);
                         k += 1;
                     }
                     for &(t, l) in lanes[1..k].iter().rev() {
+                        let l = l as usize;
                         stack[sp] = MaybeUninit::new(Entry { t, child: node.child[l], count: node.count[l] });
                         sp += 1;
                     }
-                    let (t, l) = lanes[0];
+                    let (t, l) = (lanes[0].0, lanes[0].1 as usize);
                     cur = Entry { t, child: node.child[l], count: node.count[l] };
                     continue 'outer;
                 }
