@@ -13,7 +13,8 @@ use rtdiff::geometry::TriangleTest;
 fn main() -> rtdiff::Result<()> {
     let path = std::env::args().nth(1).unwrap_or_else(|| "assets/dragon_87k.obj".into());
     let prims = rtdiff::cli::bvh_stats::load_primitives(std::path::Path::new(&path), true)?;
-    let cfg = AccelConfig { builder: Builder::Sah, ..Default::default() };
+    let bins = std::env::var("BINS").ok().and_then(|s| s.parse().ok()).unwrap_or(16);
+    let cfg = AccelConfig { builder: Builder::Sah, bins, ..Default::default() };
     let bvh = rtdiff::bvh::build_wide(&prims, &cfg);
     println!("{path}: {} primitives, {} wide nodes", prims.len(), bvh.nodes.len());
     println!("{:<12} {:>10} {:>10} {:>12} {:>14}", "rays", "nodes/ray", "leaves/ray", "packets/ray", "packets/leaf");

@@ -16,6 +16,7 @@ pub mod build;
 pub mod build_median;
 pub mod build_sah;
 pub mod build_sah_volume;
+pub mod collapse;
 pub mod node;
 pub mod packet;
 pub mod prims;

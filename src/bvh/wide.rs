@@ -45,7 +45,8 @@ pub struct WideNode {
 const _: () = assert!(std::mem::size_of::<WideNode>() == 256);
 
 impl WideNode {
-    const EMPTY: WideNode = WideNode {
+    /// A node with every lane empty.
+    pub(super) const EMPTY: WideNode = WideNode {
         b: [
             [f32::INFINITY; WIDTH],
             [f32::INFINITY; WIDTH],
@@ -58,7 +59,8 @@ impl WideNode {
         count: [0; WIDTH],
     };
 
-    fn set_lane(&mut self, lane: usize, n: &Node, child: u32, count: u32) {
+    /// Set lane `lane` to binary node `n`'s box with the given child or leaf range.
+    pub(super) fn set_lane(&mut self, lane: usize, n: &Node, child: u32, count: u32) {
         for a in 0..3 {
             self.b[a][lane] = n.min[a];
             self.b[3 + a][lane] = n.max[a];
@@ -558,11 +560,7 @@ fn avx2_available() -> bool {
 
 /// The 8-wide collapse of binary `nodes` (empty for an empty tree).
 fn collapse_all(bin: &[Node]) -> Vec<WideNode> {
-    let mut nodes = Vec::with_capacity(bin.len() / 4 + 1);
-    if !bin.is_empty() {
-        collapse(bin, 0, &mut nodes);
-    }
-    nodes
+    super::collapse::collapse(bin)
 }
 
 /// Pack every leaf lane's triangles (`tri(k)` gives leaf slot `k`) into
@@ -579,44 +577,4 @@ fn pack(nodes: &mut [WideNode], tri: impl Fn(usize) -> ([Vec3; 3], u32)) -> TriP
         }
     }
     packets
-}
-
-fn collapse(bin: &[Node], i: usize, out: &mut Vec<WideNode>) -> u32 {
-    let me = out.len();
-    out.push(WideNode::EMPTY);
-    // (binary node, surface area; negative for leaves, which are never opened)
-    let area = |k: usize| if bin[k].is_leaf() { -1.0 } else { bin[k].bounds().surface_area() };
-    let mut kids = [(0usize, 0.0f32); WIDTH];
-    let mut len = if bin[i].is_leaf() {
-        kids[0] = (i, -1.0);
-        1
-    } else {
-        let (l, r) = (i + 1, bin[i].offset as usize);
-        kids[0] = (l, area(l));
-        kids[1] = (r, area(r));
-        2
-    };
-    while len < WIDTH {
-        let (j, &(k, a)) =
-            kids[..len].iter().enumerate().max_by(|x, y| x.1.1.total_cmp(&y.1.1)).unwrap_or((0, &(0, -1.0)));
-        if a < 0.0 {
-            break; // only leaves left
-        }
-        let (l, r) = (k + 1, bin[k].offset as usize);
-        kids[j] = (l, area(l));
-        kids[len] = (r, area(r));
-        len += 1;
-    }
-    let mut node = WideNode::EMPTY;
-    for (lane, &(k, _)) in kids[..len].iter().enumerate() {
-        let n = &bin[k];
-        if n.is_leaf() {
-            node.set_lane(lane, n, n.offset, n.count);
-        } else {
-            let c = collapse(bin, k, out);
-            node.set_lane(lane, n, c, 0);
-        }
-    }
-    out[me] = node;
-    me as u32
 }
