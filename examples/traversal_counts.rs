@@ -3,7 +3,7 @@
 //! incoherent rays. Unlike timings, these counts do not depend on the
 //! machine's load, so they compare tree layouts and build parameters exactly.
 //!
-//! `cargo run --release --example traversal_counts -- [mesh.obj]`
+//! `cargo run --release --example traversal_counts -- [mesh.obj] [bins]`
 
 use rtdiff::accel::{AccelConfig, Builder};
 use rtdiff::bvh::rays::{Camera, incoherent_rays};
@@ -11,9 +11,10 @@ use rtdiff::bvh::wide::TraversalCounts;
 use rtdiff::geometry::TriangleTest;
 
 fn main() -> rtdiff::Result<()> {
-    let path = std::env::args().nth(1).unwrap_or_else(|| "assets/dragon_87k.obj".into());
+    let mut args = std::env::args().skip(1);
+    let path = args.next().unwrap_or_else(|| "assets/dragon_87k.obj".into());
+    let bins = args.next().and_then(|s| s.parse().ok()).unwrap_or(16);
     let prims = rtdiff::cli::bvh_stats::load_primitives(std::path::Path::new(&path), true)?;
-    let bins = std::env::var("BINS").ok().and_then(|s| s.parse().ok()).unwrap_or(16);
     let cfg = AccelConfig { builder: Builder::Sah, bins, ..Default::default() };
     let bvh = rtdiff::bvh::build_wide(&prims, &cfg);
     println!("{path}: {} primitives, {} wide nodes", prims.len(), bvh.nodes.len());
