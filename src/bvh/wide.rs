@@ -20,10 +20,15 @@ use super::{BinaryBvh, LeafPrims, Node};
 /// Children per wide node.
 pub const WIDTH: usize = 8;
 
-/// Traversal stack entries: at most `WIDTH - 1` pending siblings per level and
-/// at most 100 levels (every builder caps the binary depth, and collapsing
-/// never deepens the tree).
+/// Traversal stack entries for any tree: at most `WIDTH` pending entries per
+/// level and at most 100 levels (every builder caps the binary depth, and
+/// collapsing never deepens the tree).
 const STACK: usize = 1024;
+/// Stack entries for trees of at most `SHALLOW_STACK / WIDTH` levels (every
+/// mesh tested here): the closest-hit stack then stays under a 4 KiB page,
+/// so a call needs no stack probes and touches fewer cache lines, which
+/// matters for rays that miss everything.
+const SHALLOW_STACK: usize = 288;
 
 /// An 8-wide node: child boxes in structure-of-arrays form for SIMD tests.
 ///
@@ -182,13 +187,15 @@ struct Entry {
 
 /// Nearest-first closest-hit traversal, generic over the box test.
 macro_rules! closest {
-    ($self:ident, $ray:ident, $test:ident, $box8:ident, $leaf:ident, $counts:expr) => {{
+    ($self:ident, $ray:ident, $test:ident, $box8:ident, $leaf:ident, $counts:expr, $stack:expr) => {{
         let pre = WidePre::new($ray);
-        let wr = WatertightRay::new($ray.dir);
+        // The shear of the triangle test is made at the first leaf: most
+        // camera rays of a mesh that does not fill the view reach none.
+        let mut wr: Option<WatertightRay> = None;
         let mut r = *$ray;
         let mut best: Option<Hit> = None;
         let mut cull = cull_bound(r.t_max);
-        let mut stack = [MaybeUninit::<Entry>::uninit(); STACK];
+        let mut stack = [MaybeUninit::<Entry>::uninit(); $stack];
         let mut sp = 0usize;
         let mut cur = Entry { t: r.t_min, child: 0, count: 0 };
         'outer: loop {
@@ -242,7 +249,8 @@ macro_rules! closest {
                 }
             } else if {
                 $counts.leaf(cur.count);
-                $self.$leaf(cur.child, cur.count, &mut r, &wr, $test, &mut best)
+                let wr = wr.get_or_insert_with(|| WatertightRay::new($ray.dir));
+                $self.$leaf(cur.child, cur.count, &mut r, wr, $test, &mut best)
             } {
                 cull = cull_bound(r.t_max);
             }
@@ -265,13 +273,13 @@ macro_rules! closest {
 
 /// Any-hit traversal, generic over the box test (no ordering needed).
 macro_rules! any_hit {
-    ($self:ident, $ray:ident, $test:ident, $box8:ident, $leaf:ident) => {{
+    ($self:ident, $ray:ident, $test:ident, $box8:ident, $leaf:ident, $stack:expr) => {{
         let pre = WidePre::new($ray);
-        let wr = WatertightRay::new($ray.dir);
+        let mut wr: Option<WatertightRay> = None;
         let cull = cull_bound($ray.t_max);
         // Only inner nodes are stacked: hit leaves are tested at once, so an
         // occluder is found before descending further.
-        let mut stack = [MaybeUninit::<u32>::uninit(); STACK];
+        let mut stack = [MaybeUninit::<u32>::uninit(); $stack];
         stack[0] = MaybeUninit::new(0);
         let mut sp = 1usize;
         while sp > 0 {
@@ -283,7 +291,8 @@ macro_rules! any_hit {
                 let l = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
                 if node.count[l] > 0 {
-                    if $self.$leaf(node.child[l], node.count[l], $ray, &wr, $test) {
+                    let wr = wr.get_or_insert_with(|| WatertightRay::new($ray.dir));
+                    if $self.$leaf(node.child[l], node.count[l], $ray, wr, $test) {
                         return true;
                     }
                 } else {
@@ -347,6 +356,8 @@ pub struct WideBvh {
     /// [`Self::prims`] entries (`count` is still the number of triangles).
     pub packets: Option<TriPackets>,
     use_avx2: bool,
+    /// Wide nodes on the longest root-to-leaf path (sizes the traversal stack).
+    levels: usize,
 }
 
 impl WideBvh {
@@ -358,7 +369,7 @@ impl WideBvh {
         let prims = bvh.prims;
         let packets = (prims.num_triangles as usize == prims.len())
             .then(|| pack(&mut nodes, |k| (prims.entries[k].v, prims.entries[k].id)));
-        Self { nodes, prims, packets, use_avx2: avx2_available() }
+        Self { levels: levels(&nodes), nodes, prims, packets, use_avx2: avx2_available() }
     }
 
     /// [`Self::from_binary`] for a tree whose primitives are not gathered yet:
@@ -373,10 +384,10 @@ impl WideBvh {
                 (prims.triangles[id as usize].v, id)
             });
             let prims = LeafPrims { entries: Vec::new(), num_triangles };
-            Self { nodes, prims, packets: Some(packets), use_avx2: avx2_available() }
+            Self { levels: levels(&nodes), nodes, prims, packets: Some(packets), use_avx2: avx2_available() }
         } else {
             let prims = LeafPrims::new(prims, &tree.order);
-            Self { nodes, prims, packets: None, use_avx2: avx2_available() }
+            Self { levels: levels(&nodes), nodes, prims, packets: None, use_avx2: avx2_available() }
         }
     }
 
@@ -413,12 +424,23 @@ impl WideBvh {
         if self.nodes.is_empty() {
             return None;
         }
+        let shallow = self.levels * WIDTH <= SHALLOW_STACK;
         #[cfg(target_arch = "x86_64")]
         if self.use_avx2 {
             // SAFETY: use_avx2 is only set when the CPU reports AVX2.
-            return unsafe { self.intersect_avx2(ray, test, counts) };
+            return unsafe {
+                if shallow {
+                    self.intersect_avx2::<C, SHALLOW_STACK>(ray, test, counts)
+                } else {
+                    self.intersect_avx2::<C, STACK>(ray, test, counts)
+                }
+            };
         }
-        self.intersect_scalar(ray, test, counts)
+        if shallow {
+            self.intersect_scalar::<C, SHALLOW_STACK>(ray, test, counts)
+        } else {
+            self.intersect_scalar::<C, STACK>(ray, test, counts)
+        }
     }
 
     /// True when anything is hit within the ray's interval.
@@ -426,12 +448,23 @@ impl WideBvh {
         if self.nodes.is_empty() {
             return false;
         }
+        let shallow = self.levels * WIDTH <= SHALLOW_STACK;
         #[cfg(target_arch = "x86_64")]
         if self.use_avx2 {
             // SAFETY: use_avx2 is only set when the CPU reports AVX2.
-            return unsafe { self.occluded_avx2(ray, test) };
+            return unsafe {
+                if shallow {
+                    self.occluded_avx2::<SHALLOW_STACK>(ray, test)
+                } else {
+                    self.occluded_avx2::<STACK>(ray, test)
+                }
+            };
         }
-        self.occluded_scalar(ray, test)
+        if shallow {
+            self.occluded_scalar::<SHALLOW_STACK>(ray, test)
+        } else {
+            self.occluded_scalar::<STACK>(ray, test)
+        }
     }
 
     /// Ask the cache for the nodes and leaf primitives of the children in
@@ -526,25 +559,44 @@ impl WideBvh {
         }
     }
 
-    fn intersect_scalar<C: Count>(&self, ray: &Ray, test: TriangleTest, counts: &mut C) -> Option<Hit> {
-        closest!(self, ray, test, box8_portable, leaf_closest_scalar, counts)
+    fn intersect_scalar<C: Count, const S: usize>(&self, ray: &Ray, test: TriangleTest, counts: &mut C) -> Option<Hit> {
+        closest!(self, ray, test, box8_portable, leaf_closest_scalar, counts, S)
     }
 
-    fn occluded_scalar(&self, ray: &Ray, test: TriangleTest) -> bool {
-        any_hit!(self, ray, test, box8_portable, leaf_occluded_scalar)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn intersect_avx2<C: Count>(&self, ray: &Ray, test: TriangleTest, counts: &mut C) -> Option<Hit> {
-        closest!(self, ray, test, box8_avx2, leaf_closest_simd, counts)
+    fn occluded_scalar<const S: usize>(&self, ray: &Ray, test: TriangleTest) -> bool {
+        any_hit!(self, ray, test, box8_portable, leaf_occluded_scalar, S)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn occluded_avx2(&self, ray: &Ray, test: TriangleTest) -> bool {
-        any_hit!(self, ray, test, box8_avx2, leaf_occluded_simd)
+    fn intersect_avx2<C: Count, const S: usize>(&self, ray: &Ray, test: TriangleTest, counts: &mut C) -> Option<Hit> {
+        closest!(self, ray, test, box8_avx2, leaf_closest_simd, counts, S)
     }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn occluded_avx2<const S: usize>(&self, ray: &Ray, test: TriangleTest) -> bool {
+        any_hit!(self, ray, test, box8_avx2, leaf_occluded_simd, S)
+    }
+}
+
+/// Wide nodes on the longest root-to-leaf path (0 for an empty tree).
+fn levels(nodes: &[WideNode]) -> usize {
+    if nodes.is_empty() {
+        return 0;
+    }
+    let mut deepest = 0;
+    let mut stack = vec![(0usize, 1usize)];
+    while let Some((i, d)) = stack.pop() {
+        deepest = deepest.max(d);
+        let n = &nodes[i];
+        for l in 0..WIDTH {
+            if n.child[l] != u32::MAX && n.count[l] == 0 {
+                stack.push((n.child[l] as usize, d + 1));
+            }
+        }
+    }
+    deepest
 }
 
 fn avx2_available() -> bool {
