@@ -630,3 +630,41 @@ fn pack(nodes: &mut [WideNode], tri: impl Fn(usize) -> ([Vec3; 3], u32)) -> TriP
     }
     packets
 }
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+    use crate::accel::AccelConfig;
+    use crate::geometry::Triangle;
+    use crate::rng::Pcg32;
+
+    /// The deep-tree stack (chosen for trees of more than 36 levels) gives
+    /// the same answers as the one-page stack on the same tree and rays.
+    #[test]
+    fn deep_and_shallow_stacks_agree() {
+        let mut rng = Pcg32::new(3, 0);
+        let mut p = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+        let triangles = (0..4000)
+            .map(|_| {
+                let c = p();
+                Triangle { v: [c, c + 0.05 * p(), c + 0.05 * p()] }
+            })
+            .collect();
+        let prims = Primitives { triangles, spheres: Vec::new() };
+        let shallow = super::super::build_wide(&prims, &AccelConfig::default());
+        assert!(shallow.levels * WIDTH <= SHALLOW_STACK);
+        let mut deep = shallow.clone();
+        deep.levels = SHALLOW_STACK; // forces the 1024-entry stack
+        let rays = super::super::rays::incoherent_rays(&prims.world_bounds(), 20_000, 7);
+        let mut hits = 0;
+        for r in &rays {
+            let a = shallow.intersect(r, TriangleTest::Watertight);
+            assert_eq!(a, deep.intersect(r, TriangleTest::Watertight));
+            assert_eq!(shallow.occluded(r, TriangleTest::Watertight), deep.occluded(r, TriangleTest::Watertight));
+            hits += usize::from(a.is_some());
+        }
+        assert!(hits > 1000, "only {hits} hits: the rays do not exercise the traversal");
+    }
+}
