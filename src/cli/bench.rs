@@ -172,6 +172,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if args.runs == 0 || args.size == 0 {
         return Err(Error::Invalid("--runs and --size must be positive".into()));
     }
+    if args.race == Some(0) {
+        return Err(Error::Invalid("--race needs at least one round".into()));
+    }
     if args.bins < 2 {
         return Err(Error::Invalid(format!("--bins must be at least 2 (got {})", args.bins)));
     }
@@ -333,9 +336,6 @@ fn ray_sets(args: &BenchArgs, prims: &Arc<Primitives>, reference: &dyn Tracer) -
 
 #[cfg(feature = "embree")]
 fn race_scene(args: &BenchArgs, prims: &Arc<Primitives>, rounds: usize) -> Result<()> {
-    if rounds == 0 {
-        return Err(Error::Invalid("--race needs at least one round".into()));
-    }
     let reference = build_tracer(prims.clone(), &AccelConfig::default())?;
     let (sets, _) = ray_sets(args, prims, reference.as_ref());
     super::race::race(
