@@ -122,6 +122,11 @@ struct Scratch {
     right_count: Vec<Vec3A>,
 }
 
+/// Primitive slots a leaf of `n` primitives costs: `n` rounded up to whole packets of [`BLOCK`].
+pub fn leaf_slots(n: usize) -> usize {
+    n.div_ceil(BLOCK) * BLOCK
+}
+
 /// `n` rounded up to whole blocks of [`BLOCK`], per lane, as floats.
 #[inline(always)]
 fn block_slots(n: UVec4) -> Vec3A {
@@ -251,7 +256,7 @@ impl SahSplit {
         let s = best_bin[axis] as usize;
         let area = bounds.surface_area() * 0.5;
         let split_cost = TRAVERSAL_COST * area + INTERSECTION_COST * cost;
-        let leaf_cost = INTERSECTION_COST * (n.div_ceil(BLOCK) * BLOCK) as f32 * area;
+        let leaf_cost = INTERSECTION_COST * leaf_slots(n) as f32 * area;
         if n <= SAH_MAX_LEAF && split_cost >= leaf_cost {
             return None;
         }

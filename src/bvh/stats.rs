@@ -4,7 +4,7 @@
 use serde::Serialize;
 
 use super::BinaryBvh;
-use super::build_sah::{BLOCK, INTERSECTION_COST, TRAVERSAL_COST};
+use super::build_sah::{INTERSECTION_COST, TRAVERSAL_COST, leaf_slots};
 
 /// Statistics of a binary BVH (and of its 8-wide collapse).
 #[derive(Clone, Debug, Serialize)]
@@ -23,7 +23,7 @@ pub struct BvhStats {
     pub max_prims_per_leaf: u32,
     /// Mean primitive count of a leaf.
     pub mean_prims_per_leaf: f64,
-    /// SAH cost with the `sah` builder's constants and leaf packets of [`BLOCK`]
+    /// SAH cost with the `sah` builder's constants and leaf packets of [`super::build_sah::BLOCK`]
     /// primitives, relative to the root's surface area.
     pub sah_cost: f64,
     /// Memory of binary nodes and reordered primitives, in bytes.
@@ -65,7 +65,7 @@ impl BvhStats {
                 s.leaves += 1;
                 s.levels = s.levels.max(level);
                 s.max_prims_per_leaf = s.max_prims_per_leaf.max(n.count);
-                area_sum += a * f64::from(INTERSECTION_COST) * ((n.count as usize).div_ceil(BLOCK) * BLOCK) as f64;
+                area_sum += a * f64::from(INTERSECTION_COST) * leaf_slots(n.count as usize) as f64;
             } else {
                 area_sum += a * f64::from(TRAVERSAL_COST);
                 stack.push((i + 1, level + 1));

@@ -305,6 +305,27 @@ macro_rules! any_hit {
     }};
 }
 
+/// Call the AVX2 traversal `$avx2` when the CPU has AVX2, else the portable
+/// `$scalar`, with the one-page stack when the tree is shallow enough and the
+/// large one otherwise (the stack size is a const generic after `$g`).
+macro_rules! dispatch {
+    ($self:ident, $avx2:ident, $scalar:ident, [$($g:ty),*], ($($arg:expr),*)) => {{
+        let shallow = $self.levels * WIDTH <= SHALLOW_STACK;
+        #[cfg(target_arch = "x86_64")]
+        if $self.use_avx2 {
+            // SAFETY: use_avx2 is only set when the CPU reports AVX2.
+            return unsafe {
+                if shallow {
+                    $self.$avx2::<$($g,)* SHALLOW_STACK>($($arg),*)
+                } else {
+                    $self.$avx2::<$($g,)* STACK>($($arg),*)
+                }
+            };
+        }
+        if shallow { $self.$scalar::<$($g,)* SHALLOW_STACK>($($arg),*) } else { $self.$scalar::<$($g,)* STACK>($($arg),*) }
+    }};
+}
+
 /// Work done by closest-hit traversals, summed over rays.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct TraversalCounts {
@@ -365,7 +386,7 @@ impl WideBvh {
     /// children and repeatedly opens the inner child of largest surface area
     /// until it has eight children or only leaves.
     pub fn from_binary(bvh: BinaryBvh) -> Self {
-        let mut nodes = collapse_all(&bvh.nodes);
+        let mut nodes = super::collapse::collapse(&bvh.nodes);
         let prims = bvh.prims;
         let packets = (prims.num_triangles as usize == prims.len())
             .then(|| pack(&mut nodes, |k| (prims.entries[k].v, prims.entries[k].id)));
@@ -376,7 +397,7 @@ impl WideBvh {
     /// triangle meshes go straight from `prims` into packets (no intermediate
     /// [`LeafPrims`]); scenes with spheres gather [`LeafPrims`] instead.
     pub fn from_tree(prims: &Primitives, tree: &BuiltTree) -> Self {
-        let mut nodes = collapse_all(&tree.nodes);
+        let mut nodes = super::collapse::collapse(&tree.nodes);
         let num_triangles = prims.triangles.len() as u32;
         if prims.spheres.is_empty() {
             let packets = pack(&mut nodes, |k| {
@@ -424,23 +445,7 @@ impl WideBvh {
         if self.nodes.is_empty() {
             return None;
         }
-        let shallow = self.levels * WIDTH <= SHALLOW_STACK;
-        #[cfg(target_arch = "x86_64")]
-        if self.use_avx2 {
-            // SAFETY: use_avx2 is only set when the CPU reports AVX2.
-            return unsafe {
-                if shallow {
-                    self.intersect_avx2::<C, SHALLOW_STACK>(ray, test, counts)
-                } else {
-                    self.intersect_avx2::<C, STACK>(ray, test, counts)
-                }
-            };
-        }
-        if shallow {
-            self.intersect_scalar::<C, SHALLOW_STACK>(ray, test, counts)
-        } else {
-            self.intersect_scalar::<C, STACK>(ray, test, counts)
-        }
+        dispatch!(self, intersect_avx2, intersect_scalar, [C], (ray, test, counts))
     }
 
     /// True when anything is hit within the ray's interval.
@@ -448,23 +453,7 @@ impl WideBvh {
         if self.nodes.is_empty() {
             return false;
         }
-        let shallow = self.levels * WIDTH <= SHALLOW_STACK;
-        #[cfg(target_arch = "x86_64")]
-        if self.use_avx2 {
-            // SAFETY: use_avx2 is only set when the CPU reports AVX2.
-            return unsafe {
-                if shallow {
-                    self.occluded_avx2::<SHALLOW_STACK>(ray, test)
-                } else {
-                    self.occluded_avx2::<STACK>(ray, test)
-                }
-            };
-        }
-        if shallow {
-            self.occluded_scalar::<SHALLOW_STACK>(ray, test)
-        } else {
-            self.occluded_scalar::<STACK>(ray, test)
-        }
+        dispatch!(self, occluded_avx2, occluded_scalar, [], (ray, test))
     }
 
     /// Ask the cache for the nodes and leaf primitives of the children in
@@ -608,11 +597,6 @@ fn avx2_available() -> bool {
     {
         false
     }
-}
-
-/// The 8-wide collapse of binary `nodes` (empty for an empty tree).
-fn collapse_all(bin: &[Node]) -> Vec<WideNode> {
-    super::collapse::collapse(bin)
 }
 
 /// Pack every leaf lane's triangles (`tri(k)` gives leaf slot `k`) into
