@@ -8,4 +8,5 @@ pub mod parity;
 #[cfg(feature = "embree")]
 mod race;
 pub mod render;
+pub mod report;
 pub mod trace;
