@@ -5,8 +5,6 @@ pub mod bench;
 pub mod bvh_stats;
 pub mod debug;
 pub mod parity;
-#[cfg(feature = "embree")]
-mod race;
 pub mod render;
 pub mod report;
 pub mod trace;

@@ -1,10 +1,20 @@
-//! Measurements for the reports: each returns a typed, serde-serialisable
-//! result that [`crate::report`] turns into tables, plots and pages.
+//! Measurement: clocks ([`clock`]), the builder x traversal benchmark
+//! ([`bench`]), the interleaved race against Embree ([`race`]), and the
+//! reports' measurements: the performance table ([`table`]), run time against
+//! error ([`convergence`]) and numerical stability ([`stability`]). Each
+//! returns a typed, serialisable report; `cli/` prints them and
+//! [`crate::report`] turns them into tables, plots and pages.
 
+pub mod bench;
+pub mod clock;
 #[cfg(rtdiff_tmp)]
 pub mod convergence;
 pub mod machine;
 pub mod progress;
+pub mod race;
 pub mod stability;
 pub mod summary;
 pub mod table;
+
+pub use bench::{BenchOptions, BenchReport};
+pub use race::RaceReport;

@@ -11,8 +11,8 @@ use glam::Vec3;
 use serde::Serialize;
 
 use crate::error::{Error, Result};
-use crate::harness::parity::{self, ParityOptions, Reference, StressRow};
-use crate::harness::raysets::SetKind;
+use crate::rays::SetKind;
+use crate::verify::hits::{self as parity, ParityOptions, Reference, StressRow};
 
 /// Options of the stability sweep.
 #[derive(Clone, Debug)]
@@ -141,7 +141,7 @@ pub fn run(opts: &StabilityOptions) -> Result<StabilityReport> {
     let mut points = Vec::new();
     let mut tracers = [String::new(), String::new(), String::new()];
     for path in &opts.scenes {
-        let ctx = crate::harness::load_context(path)?;
+        let ctx = crate::rays::load_context(path)?;
         let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("scene").to_string();
         let b = ctx.prims.world_bounds();
         let radius = 0.5 * b.extent().length();
