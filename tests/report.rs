@@ -68,7 +68,8 @@ fn report_all_quick_writes_a_page_whose_links_resolve() {
             assert!(std::fs::read_to_string(&p).unwrap().contains("<svg"), "{t} is not an SVG");
         }
     }
-    for expected in ["perf.svg", "convergence-samples.svg", "stability-leaks-scale.svg", "perf.json", "stability.json"] {
+    for expected in ["perf.svg", "convergence-samples.svg", "stability-leaks-scale.svg", "perf.json", "stability.json"]
+    {
         assert!(targets.iter().any(|t| t == expected), "index.html does not show {expected}");
     }
     assert!(targets.iter().filter(|t| t.starts_with("images/")).count() >= 4 * 5, "side-by-side rows missing");
@@ -78,7 +79,8 @@ fn report_all_quick_writes_a_page_whose_links_resolve() {
     assert!(html.matches("Regenerate: <code>rtdiff report ").count() >= tables + plots);
 
     // The performance table: three columns, one cell per column, units as declared.
-    let perf: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("perf.json")).unwrap()).unwrap();
+    let perf: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("perf.json")).unwrap()).unwrap();
     let cols = perf["columns"].as_array().unwrap();
     let tris: Vec<u64> = cols.iter().map(|c| c["triangles"].as_u64().unwrap()).collect();
     assert_eq!(&tris[..2], [32, 968]);
@@ -96,7 +98,8 @@ fn report_all_quick_writes_a_page_whose_links_resolve() {
                 assert!(c["note"].is_string(), "{key}: a missing figure says why");
                 continue;
             };
-            let (med, min, max) = (m["median"].as_f64().unwrap(), m["min"].as_f64().unwrap(), m["max"].as_f64().unwrap());
+            let (med, min, max) =
+                (m["median"].as_f64().unwrap(), m["min"].as_f64().unwrap(), m["max"].as_f64().unwrap());
             assert!(min <= med && med <= max, "{key}: {min} {med} {max}");
             match unit {
                 "ms" => {

@@ -57,13 +57,13 @@ impl Feature {
     /// The scene file (under `scenes/`) and what is changed in it.
     pub fn setup(self) -> (&'static str, &'static str) {
         match self {
-            Feature::AreaRandom => {
-                ("cornell_box_parallelogram_light.json", "light_sampling random, light_samples = N")
-            }
+            Feature::AreaRandom => ("cornell_box_parallelogram_light.json", "light_sampling random, light_samples = N"),
             Feature::AreaJittered => {
                 ("cornell_box_parallelogram_light.json", "light_sampling jittered, light_samples = N")
             }
-            Feature::Glossy => ("cornell_box.json", "glossy on, tall box glossy (ks 0.9, shininess 40), glossy_samples = N"),
+            Feature::Glossy => {
+                ("cornell_box.json", "glossy on, tall box glossy (ks 0.9, shininess 40), glossy_samples = N")
+            }
             Feature::DepthOfField => {
                 ("spheres.json", "depth_of_field on, aperture 0.15, focus 6 (blue sphere), dof_samples = N")
             }
@@ -341,11 +341,8 @@ pub fn run(opts: &ConvergenceOptions) -> Result<ConvergenceReport> {
             points.push(ConvergencePoint { samples: n, ms, rel_mse: m.rel_mse, flip: f.mean });
             bar.inc(1);
         }
-        let fit_pts: Vec<(f64, f64)> = points
-            .iter()
-            .filter(|p| p.samples <= opts.fit_max)
-            .map(|p| (f64::from(p.samples), p.rel_mse))
-            .collect();
+        let fit_pts: Vec<(f64, f64)> =
+            points.iter().filter(|p| p.samples <= opts.fit_max).map(|p| (f64::from(p.samples), p.rel_mse)).collect();
         let (scene, setup) = feature.setup();
         curves.push(FeatureCurve {
             feature,

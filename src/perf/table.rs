@@ -226,7 +226,12 @@ pub fn rows() -> Vec<RowSpec> {
         Unit::Ms,
     ));
     v.push(("levels-sah".into(), "sah levels".into(), RowKind::Levels { builder: Sah }, Unit::Count));
-    v.push(("max-leaf-sah".into(), "Max tris per leaf node (sah)".into(), RowKind::MaxLeaf { builder: Sah }, Unit::Count));
+    v.push((
+        "max-leaf-sah".into(),
+        "Max tris per leaf node (sah)".into(),
+        RowKind::MaxLeaf { builder: Sah },
+        Unit::Count,
+    ));
     v.into_iter()
         .map(|(key, label, kind, unit)| RowSpec { published: published(&key), key, label, kind, unit })
         .collect()
@@ -373,13 +378,12 @@ pub fn run(opts: &PerfOptions) -> Result<PerfReport> {
 
 fn measure(scene: &Scene, spec: &RowSpec, opts: &PerfOptions) -> Result<(Option<Measure>, Option<String>)> {
     let prims = &scene.prims;
-    let bvh_stats = |builder| crate::bvh::stats_for(prims, &AccelSpec::native(builder, Traversal::Basic).apply(&scene.accel));
+    let bvh_stats =
+        |builder| crate::bvh::stats_for(prims, &AccelSpec::native(builder, Traversal::Basic).apply(&scene.accel));
     Ok(match spec.kind {
         RowKind::Triangles => (Some(Measure::exact(prims.triangles.len() as f64)), None),
         RowKind::Levels { builder } => (Some(Measure::exact(f64::from(bvh_stats(builder).levels))), None),
-        RowKind::MaxLeaf { builder } => {
-            (Some(Measure::exact(f64::from(bvh_stats(builder).max_prims_per_leaf))), None)
-        }
+        RowKind::MaxLeaf { builder } => (Some(Measure::exact(f64::from(bvh_stats(builder).max_prims_per_leaf))), None),
         RowKind::Build { accel } => {
             let cfg = accel.apply(&scene.accel);
             let mut times = Vec::with_capacity(opts.runs);

@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::plot::{self, Line, Scale};
+use super::plot::{self, Legend, Line, Scale};
 use super::table::{Table, fmt_num};
 use crate::error::Result;
 use crate::perf::convergence::ConvergenceReport;
@@ -97,7 +97,8 @@ pub fn convergence_plots(r: &ConvergenceReport, dir: &Path) -> Result<Vec<PathBu
             dashed: false,
         });
         if let Some(f) = c.fit {
-            let ns: Vec<f64> = c.points.iter().map(|p| f64::from(p.samples)).filter(|&n| n <= f64::from(r.fit_max)).collect();
+            let ns: Vec<f64> =
+                c.points.iter().map(|p| f64::from(p.samples)).filter(|&n| n <= f64::from(r.fit_max)).collect();
             by_samples.push(Line {
                 name: format!("{name} fit, slope {:.2}", f.slope),
                 points: ns.iter().map(|&n| (n, f.at(n))).collect(),
@@ -130,12 +131,24 @@ pub fn convergence_plots(r: &ConvergenceReport, dir: &Path) -> Result<Vec<PathBu
     }
     let mut written = Vec::new();
     for (file, title, x, y, ls) in [
-        ("convergence-samples.svg", "relMSE against samples", ("samples", Scale::Log), ("relMSE", Scale::Log), &by_samples),
-        ("convergence-time.svg", "relMSE against render time", ("render time (ms)", Scale::Log), ("relMSE", Scale::Log), &by_time),
+        (
+            "convergence-samples.svg",
+            "relMSE against samples",
+            ("samples", Scale::Log),
+            ("relMSE", Scale::Log),
+            &by_samples,
+        ),
+        (
+            "convergence-time.svg",
+            "relMSE against render time",
+            ("render time (ms)", Scale::Log),
+            ("relMSE", Scale::Log),
+            &by_time,
+        ),
         ("convergence-flip.svg", "FLIP against samples", ("samples", Scale::Log), ("mean FLIP", Scale::Log), &flip),
     ] {
         let path = dir.join(file);
-        plot::lines(&path, title, x, y, ls)?;
+        plot::lines(&path, title, x, y, ls, Legend::UpperRight)?;
         written.push(path);
     }
     Ok(written)

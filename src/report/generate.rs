@@ -107,7 +107,8 @@ pub fn generate(opts: &ReportOptions) -> Result<Generated> {
     }
     #[cfg(rtdiff_tmp)]
     if all || opts.kind == ReportKind::Convergence {
-        let mut co = if opts.quick { ConvergenceOptions::quick(&opts.root) } else { ConvergenceOptions::full(&opts.root) };
+        let mut co =
+            if opts.quick { ConvergenceOptions::quick(&opts.root) } else { ConvergenceOptions::full(&opts.root) };
         co.images = Some(dir.join("images"));
         co.quiet = opts.quiet;
         let r = crate::perf::convergence::run(&co)?;
@@ -176,8 +177,7 @@ fn convergence_files(
         "relMSE against render time: the time to reach an error (dashed: the target).",
         "Mean LDR-FLIP against samples.",
     ];
-    let figures =
-        plots.iter().zip(captions).map(|(p, c)| Figure { file: rel(dir, p), caption: c.into() }).collect();
+    let figures = plots.iter().zip(captions).map(|(p, c)| Figure { file: rel(dir, p), caption: c.into() }).collect();
     files.extend(plots);
     let mut pictures = Vec::new();
     for c in &r.curves {

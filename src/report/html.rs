@@ -99,8 +99,7 @@ fn section(s: &Section) -> String {
     }
     if !s.data.is_empty() {
         o.push_str("<p class=\"cmd\">Data: ");
-        let links: Vec<String> =
-            s.data.iter().map(|d| format!("<a href=\"{0}\">{0}</a>", escape_html(d))).collect();
+        let links: Vec<String> = s.data.iter().map(|d| format!("<a href=\"{0}\">{0}</a>", escape_html(d))).collect();
         o.push_str(&links.join(", "));
         o.push_str("</p>\n");
     }
@@ -127,7 +126,9 @@ fn section(s: &Section) -> String {
             f = escape_html(&p.reference),
             fl = escape_html(&p.reference_label)
         ));
-        for (file, cap) in [(&p.reference, &p.reference_label), (&p.difference.0, &p.difference.1), (&p.flip.0, &p.flip.1)] {
+        for (file, cap) in
+            [(&p.reference, &p.reference_label), (&p.difference.0, &p.difference.1), (&p.flip.0, &p.flip.1)]
+        {
             o.push_str(&format!(
                 "<figure><img src=\"{}\" alt=\"{c}\"><figcaption>{c}</figcaption></figure>\n",
                 escape_html(file),
@@ -149,7 +150,9 @@ pub fn links(html: &str) -> Vec<String> {
         while let Some(i) = rest.find(attr) {
             rest = &rest[i + attr.len()..];
             if let Some(j) = rest.find('"') {
-                out.push(rest[..j].replace("&amp;", "&").replace("&quot;", "\"").replace("&lt;", "<").replace("&gt;", ">"));
+                out.push(
+                    rest[..j].replace("&amp;", "&").replace("&quot;", "\"").replace("&lt;", "<").replace("&gt;", ">"),
+                );
                 rest = &rest[j..];
             }
         }

@@ -91,7 +91,8 @@ pub fn perf_markdown(r: &PerfReport) -> String {
 /// Plot of every render row: rtdiff's median with its min-max per scene, and the reports' figures.
 pub fn perf_plot(r: &PerfReport, path: &Path) -> Result<()> {
     let renders: Vec<_> = r.rows.iter().filter(|row| matches!(row.spec.kind, RowKind::Render { .. })).collect();
-    let labels: Vec<String> = renders.iter().map(|row| row.spec.key.trim_start_matches("render-").to_string()).collect();
+    let labels: Vec<String> =
+        renders.iter().map(|row| row.spec.key.trim_start_matches("render-").to_string()).collect();
     let mut series = Vec::new();
     for (ci, col) in r.columns.iter().enumerate() {
         let pts = renders

@@ -114,7 +114,11 @@ pub fn categories(path: &Path, title: &str, y_desc: &str, labels: &[String], ser
         .x_labels(n)
         .x_label_formatter(&|x| {
             let i = x.round();
-            if (x - i).abs() < 1e-6 && i >= 0.0 { labels.get(i as usize).cloned().unwrap_or_default() } else { String::new() }
+            if (x - i).abs() < 1e-6 && i >= 0.0 {
+                labels.get(i as usize).cloned().unwrap_or_default()
+            } else {
+                String::new()
+            }
         })
         .y_desc(y_desc)
         .y_label_formatter(&|v| ys.label(*v))
@@ -131,7 +135,7 @@ pub fn categories(path: &Path, title: &str, y_desc: &str, labels: &[String], ser
             .filter_map(|&(x, v, lo, hi)| Some((x + dx, ys.map(v)?, ys.map(lo)?, ys.map(hi)?)))
             .collect();
         chart
-            .draw_series(pts.iter().map(|&(x, _, lo, hi)| ErrorBar::new_vertical(x, lo, (lo + hi) / 2.0, hi, c, 6)))
+            .draw_series(pts.iter().map(|&(x, v, lo, hi)| ErrorBar::new_vertical(x, lo, v, hi, c, 6)))
             .map_err(plot_err(path))?;
         let hollow = s.hollow;
         chart
@@ -141,18 +145,31 @@ pub fn categories(path: &Path, title: &str, y_desc: &str, labels: &[String], ser
             .map_err(plot_err(path))?
             .label(s.name.clone())
             .legend(move |(x, y)| {
-                if hollow { Circle::new((x + 8, y), 5, c.stroke_width(2)) } else { Circle::new((x + 8, y), 4, c.filled()) }
+                if hollow {
+                    Circle::new((x + 8, y), 5, c.stroke_width(2))
+                } else {
+                    Circle::new((x + 8, y), 4, c.filled())
+                }
             });
     }
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
+        .position(SeriesLabelPosition::UpperRight)
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .draw()
         .map_err(plot_err(path))?;
     root.present().map_err(plot_err(path))?;
     Ok(())
+}
+
+/// Corner of the legend.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Legend {
+    /// Top left (for rising curves).
+    UpperLeft,
+    /// Top right (for falling curves).
+    UpperRight,
 }
 
 /// Lines in an x-y plot with the given axis scales.
@@ -162,11 +179,10 @@ pub fn lines(
     (x_desc, xs): (&str, Scale),
     (y_desc, ys): (&str, Scale),
     lines: &[Line],
+    legend: Legend,
 ) -> Result<()> {
-    let mapped: Vec<Vec<(f64, f64)>> = lines
-        .iter()
-        .map(|l| l.points.iter().filter_map(|&(x, y)| Some((xs.map(x)?, ys.map(y)?))).collect())
-        .collect();
+    let mapped: Vec<Vec<(f64, f64)>> =
+        lines.iter().map(|l| l.points.iter().filter_map(|&(x, y)| Some((xs.map(x)?, ys.map(y)?))).collect()).collect();
     let fold = |f: fn(&(f64, f64)) -> f64, min: bool| {
         let it = mapped.iter().flatten().map(f);
         if min { it.fold(f64::INFINITY, f64::min) } else { it.fold(f64::NEG_INFINITY, f64::max) }
@@ -209,7 +225,10 @@ pub fn lines(
     }
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
+        .position(match legend {
+            Legend::UpperLeft => SeriesLabelPosition::UpperLeft,
+            Legend::UpperRight => SeriesLabelPosition::UpperRight,
+        })
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .draw()

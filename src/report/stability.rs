@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::plot::{self, Line, Scale};
+use super::plot::{self, Legend, Line, Scale};
 use super::table::{Table, fmt_num};
 use crate::error::Result;
 use crate::perf::stability::{StabilityPoint, StabilityReport};
@@ -12,11 +12,7 @@ fn triple(v: [f64; 3]) -> String {
 }
 
 fn placement(p: &StabilityPoint) -> String {
-    if p.offset_radii == 0.0 {
-        format!("scale {:e}", p.scale)
-    } else {
-        format!("moved {:e} radii", p.offset_radii)
-    }
+    if p.offset_radii == 0.0 { format!("scale {:e}", p.scale) } else { format!("moved {:e} radii", p.offset_radii) }
 }
 
 /// One table per scene: rates per placement for the three tracers.
@@ -72,7 +68,13 @@ pub fn stability_plots(r: &StabilityReport, dir: &Path) -> Result<Vec<PathBuf>> 
     scenes.dedup();
     type Rate = fn(&StabilityPoint) -> [f64; 3];
     let plots: [(&str, &str, bool, Rate, &str); 4] = [
-        ("stability-leaks-scale.svg", "Leaks against mesh scale", false, StabilityPoint::leaks_per_million, "leaks per million rays"),
+        (
+            "stability-leaks-scale.svg",
+            "Leaks against mesh scale",
+            false,
+            StabilityPoint::leaks_per_million,
+            "leaks per million rays",
+        ),
         (
             "stability-selfhits-scale.svg",
             "False self-intersections against mesh scale",
@@ -109,12 +111,7 @@ pub fn stability_plots(r: &StabilityReport, dir: &Path) -> Result<Vec<PathBuf>> 
                 if points.is_empty() {
                     continue;
                 }
-                ls.push(Line {
-                    name: format!("{scene}: {}", r.tracers[k]),
-                    points,
-                    color: si * 3 + k,
-                    dashed: false,
-                });
+                ls.push(Line { name: format!("{scene}: {}", r.tracers[k]), points, color: si * 3 + k, dashed: false });
             }
         }
         if ls.is_empty() {
@@ -122,7 +119,7 @@ pub fn stability_plots(r: &StabilityReport, dir: &Path) -> Result<Vec<PathBuf>> 
         }
         let x_desc = if by_offset { "offset (scene radii)" } else { "mesh scale" };
         let path = dir.join(file);
-        plot::lines(&path, title, (x_desc, Scale::Log), (y_desc, Scale::Linear), &ls)?;
+        plot::lines(&path, title, (x_desc, Scale::Log), (y_desc, Scale::Linear), &ls, Legend::UpperLeft)?;
         written.push(path);
     }
     Ok(written)
