@@ -6,7 +6,5 @@ pub mod bvh_stats;
 pub mod compare;
 pub mod debug;
 pub mod parity;
-#[cfg(feature = "embree")]
-mod race;
 pub mod render;
 pub mod trace;
