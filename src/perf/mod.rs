@@ -7,7 +7,6 @@
 
 pub mod bench;
 pub mod clock;
-#[cfg(rtdiff_tmp)]
 pub mod convergence;
 pub mod machine;
 pub mod progress;

@@ -9,7 +9,6 @@ use serde::Serialize;
 use super::html::{Figure, PictureRow, Section};
 use super::table::fmt_num;
 use crate::error::{Error, Result};
-#[cfg(rtdiff_tmp)]
 use crate::perf::convergence::{ConvergenceOptions, ConvergenceReport};
 use crate::perf::stability::{StabilityOptions, StabilityReport};
 use crate::perf::table::{PerfOptions, PerfReport};
@@ -105,8 +104,7 @@ pub fn generate(opts: &ReportOptions) -> Result<Generated> {
         machine = Some(super::perf::machine_table(&r.machine));
         sections.push(perf_files(&r, opts, &mut files, &mut markdown)?);
     }
-    #[cfg(rtdiff_tmp)]
-    if all || opts.kind == ReportKind::Convergence {
+        if all || opts.kind == ReportKind::Convergence {
         let mut co =
             if opts.quick { ConvergenceOptions::quick(&opts.root) } else { ConvergenceOptions::full(&opts.root) };
         co.images = Some(dir.join("images"));
@@ -158,7 +156,6 @@ fn perf_files(r: &PerfReport, opts: &ReportOptions, files: &mut Vec<PathBuf>, md
     })
 }
 
-#[cfg(rtdiff_tmp)]
 fn convergence_files(
     r: &ConvergenceReport,
     opts: &ReportOptions,

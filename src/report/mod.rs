@@ -1,7 +1,6 @@
 //! Reports a user can open: the typed results of [`crate::perf`] written as
 //! JSON, Markdown, SVG plots (plotters) and one `index.html`.
 
-#[cfg(rtdiff_tmp)]
 pub mod convergence;
 pub mod generate;
 pub mod html;
