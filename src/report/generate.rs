@@ -104,7 +104,7 @@ pub fn generate(opts: &ReportOptions) -> Result<Generated> {
         machine = Some(super::perf::machine_table(&r.machine));
         sections.push(perf_files(&r, opts, &mut files, &mut markdown)?);
     }
-        if all || opts.kind == ReportKind::Convergence {
+    if all || opts.kind == ReportKind::Convergence {
         let mut co =
             if opts.quick { ConvergenceOptions::quick(&opts.root) } else { ConvergenceOptions::full(&opts.root) };
         co.images = Some(dir.join("images"));
