@@ -4,6 +4,7 @@
 
 pub mod aabb;
 pub mod hit;
+pub mod normalize;
 pub mod offset;
 pub mod primitives;
 pub mod ray;
@@ -12,6 +13,7 @@ pub mod triangle;
 
 pub use aabb::Aabb;
 pub use hit::Hit;
+pub use normalize::normalize_to_unit_sphere;
 pub use primitives::{Primitives, Triangle};
 pub use ray::Ray;
 pub use sphere::Sphere;

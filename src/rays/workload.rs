@@ -6,37 +6,7 @@ use glam::Vec3;
 
 use crate::geometry::offset::{SpawnOffset, spawn_origin, sphere_point_error, triangle_point_error};
 use crate::geometry::{Aabb, Hit, Primitives, Ray};
-use crate::mesh::Mesh;
 use crate::rng::Pcg32;
-
-/// Centre a mesh on its vertex mean and scale it into the unit sphere
-/// (the scene default for the benchmark meshes).
-pub fn normalize_mesh(mesh: &mut Mesh) {
-    if mesh.positions.is_empty() {
-        return;
-    }
-    let n = mesh.positions.len() as f64;
-    let sum = mesh.positions.iter().fold(glam::DVec3::ZERO, |s, p| s + p.as_dvec3());
-    let c = (sum / n).as_vec3();
-    let r = mesh.positions.iter().map(|p| (*p - c).length()).fold(0.0f32, f32::max);
-    let s = if r > 0.0 { 1.0 / r } else { 1.0 };
-    mesh.map_positions(|p| (p - c) * s);
-}
-
-/// Translate and scale a mesh's vertices so that their mean is at the origin
-/// and the farthest vertex at distance 1 (the default camera's framing).
-pub fn normalise_to_unit_sphere(positions: &mut [Vec3]) {
-    if positions.is_empty() {
-        return;
-    }
-    let sum = positions.iter().fold(glam::DVec3::ZERO, |a, p| a + p.as_dvec3());
-    let c = sum / positions.len() as f64;
-    let r = positions.iter().map(|p| (p.as_dvec3() - c).length()).fold(0.0, f64::max);
-    let s = if r > 0.0 { 1.0 / r } else { 1.0 };
-    for p in positions {
-        *p = ((p.as_dvec3() - c) * s).as_vec3();
-    }
-}
 
 /// A pinhole camera.
 #[derive(Clone, Copy, Debug)]
