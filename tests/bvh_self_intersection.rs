@@ -10,9 +10,10 @@ use std::sync::Arc;
 use common::{CORNELL_BOXES, CORNELL_ROOM_TRIS, cornell};
 use glam::{DVec3, Vec3};
 use rtdiff::accel::{AccelConfig, Traversal, build_tracer};
+use rtdiff::camera::Camera;
 use rtdiff::geometry::offset::{SpawnOffset, spawn_origin};
 use rtdiff::geometry::{Hit, Ray};
-use rtdiff::rays::{Camera, surface_point};
+use rtdiff::rays::surface_point;
 
 /// Does the segment `p -> q` come within `margin` of the box `[lo, hi]`? (f64 slab test on the grown box)
 fn segment_near_box(p: DVec3, q: DVec3, lo: DVec3, hi: DVec3, margin: f64) -> bool {
@@ -44,12 +45,7 @@ fn false_shadow_hits(scale: f32, shift: f32, policy: SpawnOffset) -> (usize, usi
     let prims = Arc::new(cornell(scale, shift));
     let map = |v: Vec3| v * scale + Vec3::splat(shift);
     let light = map(Vec3::new(0.5, 0.9, 0.5));
-    let cam = Camera {
-        eye: map(Vec3::new(0.5, 0.5, -1.4)),
-        target: map(Vec3::new(0.5, 0.5, 0.5)),
-        up: Vec3::Y,
-        vfov_deg: 50.0,
-    };
+    let cam = Camera::look_at(map(Vec3::new(0.5, 0.5, -1.4)), map(Vec3::new(0.5, 0.5, 0.5)), Vec3::Y, 50.0, 200, 200);
     let tracer = build_tracer(prims.clone(), &AccelConfig::default()).unwrap();
     let basic =
         build_tracer(prims.clone(), &AccelConfig { traversal: Traversal::Basic, ..Default::default() }).unwrap();
@@ -58,7 +54,7 @@ fn false_shadow_hits(scale: f32, shift: f32, policy: SpawnOffset) -> (usize, usi
     // closed-form answer is not itself decided by rounding.
     let margin = 0.01 * f64::from(scale);
     let (mut checked, mut false_hits) = (0, 0);
-    for ray in cam.rays(200, 200) {
+    for ray in cam.pixel_centre_rays() {
         let Some(hit): Option<Hit> = tracer.intersect(&ray) else { continue };
         let (p, err, n) = surface_point(&prims, &ray, &hit);
         let to_light = light - p;

@@ -9,11 +9,11 @@ pub mod sets;
 pub mod topology;
 pub mod workload;
 
-pub use context::{CameraFn, LightFn, PinholeCamera, RayContext};
+pub use context::{CameraFn, DEFAULT_IMAGE, DEFAULT_LIGHT, LightFn, RayContext};
 pub use rng::Rng;
 pub use sets::{RaySet, RayTag, SetKind, generate, scene_scale};
 pub use topology::Topology;
-pub use workload::{Camera, incoherent_rays, shadow_rays, surface_point};
+pub use workload::{incoherent_rays, shadow_rays, surface_point};
 
 use std::path::Path;
 use std::sync::Arc;

@@ -400,8 +400,8 @@ fn generate_one(ctx: &RayContext, kind: SetKind, name: String, seed: u64, count:
 mod tests {
     use super::*;
     use crate::accel::BruteForce;
+    use crate::camera::Camera;
     use crate::geometry::{Triangle, TriangleTest};
-    use crate::rays::PinholeCamera;
 
     /// A closed tetrahedron (every edge shared, every vertex fan closed).
     fn tetra() -> Arc<Primitives> {
@@ -480,9 +480,9 @@ mod tests {
 
     #[test]
     fn camera_centre_ray_looks_at_the_target() {
-        let c = PinholeCamera::default();
+        let c = Camera::default_view(800, 800);
         let r = c.ray(400.0, 400.0);
-        let want = (c.target - c.eye).normalize();
+        let want = (Vec3::ZERO - c.position).normalize();
         assert!(r.dir.dot(want) > 1.0 - 1e-6);
         // Top-left pixel looks up and to the left of the view direction.
         let tl = c.ray(0.5, 0.5);

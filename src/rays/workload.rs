@@ -1,5 +1,5 @@
-//! Reproducible ray sets for the benchmark and the tests: pinhole camera
-//! (primary), random origin and direction (incoherent), and shadow rays from
+//! Reproducible ray sets for the benchmark and the tests: primary rays come
+//! from [`crate::camera::Camera::pixel_centre_rays`]; random origin and direction (incoherent), and shadow rays from
 //! primary hits towards a point light, spawned with a chosen offset policy.
 
 use glam::Vec3;
@@ -7,44 +7,6 @@ use glam::Vec3;
 use crate::geometry::offset::{SpawnOffset, spawn_origin, sphere_point_error, triangle_point_error};
 use crate::geometry::{Aabb, Hit, Primitives, Ray};
 use crate::rng::Pcg32;
-
-/// A pinhole camera.
-#[derive(Clone, Copy, Debug)]
-pub struct Camera {
-    /// Eye position.
-    pub eye: Vec3,
-    /// Point looked at.
-    pub target: Vec3,
-    /// Up direction.
-    pub up: Vec3,
-    /// Vertical field of view in degrees.
-    pub vfov_deg: f32,
-}
-
-impl Camera {
-    /// The scene-default viewpoint of the normalised meshes.
-    pub fn scene_default() -> Self {
-        Self { eye: Vec3::new(-0.964, 1.026, -2.649), target: Vec3::ZERO, up: Vec3::Y, vfov_deg: 50.0 }
-    }
-
-    /// One ray through the centre of each pixel of a `width` x `height` image, row by row.
-    pub fn rays(&self, width: u32, height: u32) -> Vec<Ray> {
-        let fwd = (self.target - self.eye).normalize();
-        let right = fwd.cross(self.up).normalize();
-        let up = right.cross(fwd);
-        let h = (self.vfov_deg.to_radians() * 0.5).tan();
-        let aspect = width as f32 / height as f32;
-        let mut out = Vec::with_capacity((width * height) as usize);
-        for y in 0..height {
-            for x in 0..width {
-                let sx = (2.0 * (x as f32 + 0.5) / width as f32 - 1.0) * h * aspect;
-                let sy = (1.0 - 2.0 * (y as f32 + 0.5) / height as f32) * h;
-                out.push(Ray::new(self.eye, (fwd + sx * right + sy * up).normalize()));
-            }
-        }
-        out
-    }
-}
 
 /// `n` rays with uniform random origins in `bounds` and uniform random directions.
 pub fn incoherent_rays(bounds: &Aabb, n: usize, seed: u64) -> Vec<Ray> {
