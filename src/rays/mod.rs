@@ -13,7 +13,7 @@ pub use context::{CameraFn, DEFAULT_IMAGE, DEFAULT_LIGHT, LightFn, RayContext};
 pub use rng::Rng;
 pub use sets::{RaySet, RayTag, SetKind, generate, scene_scale};
 pub use topology::Topology;
-pub use workload::{incoherent_rays, shadow_rays, surface_point};
+pub use workload::{incoherent_rays, shadow_rays};
 
 use std::path::Path;
 use std::sync::Arc;

@@ -339,9 +339,10 @@ impl Scene {
     /// Material index of primitive `prim`.
     #[inline]
     pub fn material_of(&self, prim: u32) -> u32 {
-        let nt = self.triangle_shading.len();
-        let i = prim as usize;
-        if i < nt { self.triangle_shading[i].material } else { self.sphere_materials[i - nt] }
+        match self.prims.sphere_index(prim as usize) {
+            None => self.triangle_shading[prim as usize].material,
+            Some(s) => self.sphere_materials[s],
+        }
     }
 
     /// Decide once what this render needs (see [`Plan`]).
