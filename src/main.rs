@@ -24,6 +24,8 @@ enum Command {
     Parity(rtdiff::cli::parity::ParityArgs),
     /// Trace rays from a CSV file and write the hits as CSV.
     Trace(rtdiff::cli::trace::TraceArgs),
+    /// Export a scene for Mitsuba 3 (the image oracle): scene.xml, PLY meshes, textures.
+    Export(rtdiff::cli::export::ExportArgs),
 }
 
 fn main() {
@@ -35,6 +37,7 @@ fn main() {
         Command::Bench(a) => rtdiff::cli::bench::run(a),
         Command::Parity(a) => rtdiff::cli::parity::run(a),
         Command::Trace(a) => rtdiff::cli::trace::run(a),
+        Command::Export(a) => rtdiff::cli::export::run(a),
     };
     if let Err(e) = result {
         eprintln!("rtdiff: error: {e}");

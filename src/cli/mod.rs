@@ -4,6 +4,7 @@
 pub mod bench;
 pub mod bvh_stats;
 pub mod debug;
+pub mod export;
 pub mod parity;
 #[cfg(feature = "embree")]
 mod race;
