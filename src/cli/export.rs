@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use crate::error::Result;
 use crate::scene::Overrides;
 use crate::scene::export::mitsuba::export_mitsuba_file;
+use crate::shading::ShadingModelKind;
 
 /// Target renderers of `rtdiff export`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -39,12 +40,23 @@ pub struct ExportArgs {
     /// Turn a feature on or off, e.g. `--feature normal_interpolation=off` (repeatable).
     #[arg(long = "feature", value_name = "NAME=on|off")]
     pub features: Vec<String>,
+    /// Switch every material to this shading model (default: as the scene file says).
+    #[arg(long, value_parser = parse_model)]
+    pub model: Option<ShadingModelKind>,
     /// Print the export report as JSON.
     #[arg(long)]
     pub json: bool,
     /// No warnings on stderr.
     #[arg(short, long)]
     pub quiet: bool,
+}
+
+fn parse_model(s: &str) -> std::result::Result<ShadingModelKind, String> {
+    match s {
+        "phong" => Ok(ShadingModelKind::Phong),
+        "physical" => Ok(ShadingModelKind::Physical),
+        _ => Err(format!("unknown shading model '{s}' (phong or physical)")),
+    }
 }
 
 /// Run `rtdiff export`.
@@ -58,7 +70,7 @@ pub fn run(args: &ExportArgs) -> Result<()> {
         ..Default::default()
     };
     let report = match args.to {
-        ExportTarget::Mitsuba => export_mitsuba_file(&args.scene, &ov, &args.output)?,
+        ExportTarget::Mitsuba => export_mitsuba_file(&args.scene, &ov, args.model, &args.output)?,
     };
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report).unwrap_or_default());

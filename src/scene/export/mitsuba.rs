@@ -49,13 +49,30 @@ pub struct ExportReport {
     pub deterministic: bool,
 }
 
-/// Load `scene_path` with `ov` and export it to `dir`.
-pub fn export_mitsuba_file(scene_path: &Path, ov: &Overrides, dir: &Path) -> Result<ExportReport> {
-    let scene = Scene::load_with(scene_path, ov)?;
-    let text = std::fs::read_to_string(scene_path).map_err(|e| Error::io(scene_path, &e))?;
-    let file: SceneFile =
-        serde_json::from_str(&text).map_err(|e| Error::file(scene_path, format!("invalid scene: {e}")))?;
-    export_mitsuba(&scene, &file.lights, dir)
+/// Load `scene_path` with `ov` (and every material switched to `model` when
+/// given) and export it to `dir`.
+pub fn export_mitsuba_file(
+    scene_path: &Path,
+    ov: &Overrides,
+    model: Option<ShadingModelKind>,
+    dir: &Path,
+) -> Result<ExportReport> {
+    let mut file = Scene::read_file(scene_path)?;
+    if let Some(m) = model {
+        force_shading_model(&mut file, m);
+    }
+    let lights = file.lights.clone();
+    let scene = Scene::from_file_with(file, scene_path, ov)?;
+    export_mitsuba(&scene, &lights, dir)
+}
+
+/// Switch every material of `file` (named and MTL) to the shading model `model`:
+/// the reference set renders each scene in both models.
+pub fn force_shading_model(file: &mut SceneFile, model: ShadingModelKind) {
+    file.shading_model = model;
+    for m in file.materials.values_mut() {
+        m.shading_model = Some(model);
+    }
 }
 
 /// Shapes that share a material and texturing: one PLY file and one BSDF.
