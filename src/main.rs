@@ -26,6 +26,8 @@ enum Command {
     Trace(rtdiff::cli::trace::TraceArgs),
     /// Export a scene for Mitsuba 3 (the image oracle): scene.xml, PLY meshes, textures.
     Export(rtdiff::cli::export::ExportArgs),
+    /// Compare two images (EXR or PNG): MAE, RMSE, relMSE, PSNR, max error, pixels over thresholds, FLIP.
+    Compare(rtdiff::cli::compare::CompareArgs),
 }
 
 fn main() {
@@ -38,6 +40,7 @@ fn main() {
         Command::Parity(a) => rtdiff::cli::parity::run(a),
         Command::Trace(a) => rtdiff::cli::trace::run(a),
         Command::Export(a) => rtdiff::cli::export::run(a),
+        Command::Compare(a) => rtdiff::cli::compare::run(a),
     };
     if let Err(e) = result {
         eprintln!("rtdiff: error: {e}");
