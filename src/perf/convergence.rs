@@ -348,10 +348,7 @@ pub fn run(opts: &ConvergenceOptions) -> Result<ConvergenceReport> {
             feature,
             scene: format!("scenes/{scene}"),
             setup: setup.to_string(),
-            reference: format!(
-                "rtdiff, {} samples, seed {REFERENCE_SEED}",
-                opts.reference_count
-            ),
+            reference: format!("rtdiff, {} samples, seed {REFERENCE_SEED}", opts.reference_count),
             reference_ms,
             fit: fit_loglog(&fit_pts),
             time_to_target_ms: time_to_error(&points, opts.target_rel_mse),
