@@ -21,7 +21,6 @@ pub mod count;
 pub mod node;
 pub mod packet;
 pub mod prims;
-pub mod rays;
 pub mod slab;
 pub mod stats;
 pub mod traverse_basic;
