@@ -199,8 +199,7 @@ fn heatmap_image_has_the_picture_a_colour_bar_and_the_exr_the_counts() {
     let read = exr::prelude::read_all_flat_layers_from_file(&exr).unwrap();
     let layer = &read.layer_data[0];
     for m in Metric::ALL {
-        let ch =
-            layer.channel_data.list.iter().find(|c| c.name == exr::prelude::Text::from(m.name())).expect("channel");
+        let ch = layer.channel_data.list.iter().find(|c| c.name.to_string() == m.name()).expect("channel");
         let vals: Vec<u64> = ch.sample_data.values_as_f32().map(|v| v as u64).collect();
         assert_eq!(vals, hm.counts(m), "{}", m.name());
     }
