@@ -46,12 +46,13 @@ impl Metric {
         }
     }
 
-    /// What one count is, for the image's title.
-    fn title(self) -> &'static str {
-        match self {
-            Metric::Nodes => "node visits per pixel",
-            Metric::Triangles => "triangle tests per pixel",
-            Metric::Rays => "rays traced per pixel",
+    /// What one count is, for the image's title (`wide`: the tree has 8-wide nodes).
+    fn title(self, wide: bool) -> &'static str {
+        match (self, wide) {
+            (Metric::Nodes, false) => "node visits per pixel",
+            (Metric::Nodes, true) => "8-wide node visits per pixel",
+            (Metric::Triangles, _) => "triangle tests per pixel",
+            (Metric::Rays, _) => "rays traced per pixel",
         }
     }
 }
@@ -65,6 +66,8 @@ pub struct Heatmap {
     pub height: u32,
     /// The tracer (`bvh-BUILDER/TRAVERSAL`).
     pub tracer: String,
+    /// True when node visits are of 8-wide nodes (the `fast` traversal), each testing eight boxes.
+    pub wide: bool,
     /// Per-pixel counts, row-major.
     #[serde(skip)]
     pub pixels: Vec<TraversalCounts>,
@@ -133,7 +136,7 @@ pub fn heatmap(scene: &Scene, cfg: &AccelConfig, opts: &RenderOptions) -> Result
     bar.finish_and_clear();
     let mut totals = TraversalCounts::default();
     pixels.iter().for_each(|p| totals.add(p));
-    Ok(Heatmap { width: w, height: h, tracer: bvh.name(), pixels, totals })
+    Ok(Heatmap { width: w, height: h, tracer: bvh.name(), wide: bvh.wide().is_some(), pixels, totals })
 }
 
 /// Width of the colour-bar band right of the picture.
@@ -165,11 +168,14 @@ impl Heatmap {
 
     /// The picture: counts mapped linearly from 0 to `scale_max` (None: the
     /// image's maximum; give the same value to compare heatmaps side by
-    /// side) through the inferno colour map, a title with the total and
-    /// mean above, a colour bar with its scale on the right.
+    /// side; larger counts take the top colour) through the inferno colour
+    /// map, a title with the total, mean and maximum above, a colour bar
+    /// with its scale on the right (its top label reads `>=N` when counts
+    /// exceed the scale).
     pub fn image(&self, metric: Metric, scale_max: Option<u64>) -> RgbImage {
         let counts = self.counts(metric);
-        let max = scale_max.unwrap_or_else(|| counts.iter().copied().max().unwrap_or(0)).max(1);
+        let data_max = counts.iter().copied().max().unwrap_or(0);
+        let max = scale_max.unwrap_or(data_max).max(1);
         let (w, h) = (self.width, self.height);
         let mut img = RgbImage::from_pixel(w + BAR_BAND, h + TITLE_BAND, Rgb([24, 24, 24]));
         let cmap = |v: f64| {
@@ -182,8 +188,8 @@ impl Heatmap {
         }
         let white = Rgb([235, 235, 235]);
         let mean = self.total(metric) as f64 / counts.len().max(1) as f64;
-        draw_text(&mut img, 6, 4, &format!("{} ({})", metric.title(), self.tracer), 2, white);
-        let stats = format!("total {}  mean {:.2}  max {}", self.total(metric), mean, max);
+        draw_text(&mut img, 6, 4, &format!("{} ({})", metric.title(self.wide), self.tracer), 2, white);
+        let stats = format!("total {}  mean {:.2}  max {}  scale 0..{}", self.total(metric), mean, data_max, max);
         draw_text(&mut img, 6, 24, &stats, 1, white);
         // Colour bar: top = max, bottom = 0, ticks at quarters.
         let (bx, bw) = (w + 12, 20);
@@ -200,7 +206,8 @@ impl Heatmap {
             for x in bx + bw..bx + bw + 5 {
                 img.put_pixel(x, y, white);
             }
-            let label = format!("{}", (max as f64 * f64::from(q) / 4.0).round() as u64);
+            let value = (max as f64 * f64::from(q) / 4.0).round() as u64;
+            let label = if q == 4 && data_max > max { format!(">={value}") } else { value.to_string() };
             let ly = y.saturating_sub(4).min(img.height() - 8);
             let lx = (bx + bw + 8).min(img.width().saturating_sub(text_width(&label, 1)));
             draw_text(&mut img, lx, ly, &label, 1, white);
