@@ -31,7 +31,8 @@ impl Overlay for Normals {
         let scene = ctx.scene;
         let it = Whitted::new(scene, ctx.tracer, scene.plan()).interaction(&ray, &hit);
         let mut lines = Lines::default();
-        let len = ctx.world_size(it.p, 60.0);
+        let p = it.si.p;
+        let len = ctx.world_size(p, 60.0);
         if let Some(t) = scene.prims.triangles.get(hit.prim as usize) {
             lines.triangle(t.v, color::WHITE);
             let sh = &scene.triangle_shading[hit.prim as usize];
@@ -39,8 +40,8 @@ impl Overlay for Normals {
                 lines.segment(*v, *v + ctx.world_size(*v, 60.0) * n.normalize_or(Vec3::ZERO), color::BLUE);
             }
         }
-        lines.cross(it.p, ctx.world_size(it.p, 8.0), color::YELLOW);
-        lines.segment(it.p, it.p + len * it.ns, color::YELLOW);
+        lines.cross(p, ctx.world_size(p, 8.0), color::YELLOW);
+        lines.segment(p, p + len * it.ns, color::YELLOW);
         Ok(lines)
     }
 }
