@@ -12,7 +12,7 @@ use crate::geometry::Primitives;
 /// Arguments of `rtdiff bvh-stats`.
 #[derive(clap::Args, Debug)]
 pub struct BvhStatsArgs {
-    /// Scene: a scene JSON file, or a Wavefront OBJ mesh used as is.
+    /// Scene: a scene JSON file, or a mesh (.obj, .ply, optionally .gz) used as is.
     pub scene: PathBuf,
     /// Builders to report (all when none is given).
     #[arg(long, value_enum)]
@@ -28,13 +28,13 @@ pub struct BvhStatsArgs {
     pub json: bool,
 }
 
-/// Load the primitives of `path`: an `.obj` mesh directly, anything else as a scene file.
+/// Load the primitives of `path`: a mesh (`.obj`, `.ply`, optionally `.gz`) directly, anything else as a scene file.
 /// With `normalize`, an OBJ mesh is centred on its vertex mean and scaled into the unit sphere.
 pub fn load_primitives(path: &Path, normalize: bool) -> Result<Arc<Primitives>> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match ext.as_deref() {
-        Some("obj") => {
-            let mut mesh = crate::mesh::load_obj(path)?;
+        _ if crate::mesh::is_mesh_file(path) => {
+            let mut mesh = crate::mesh::load_mesh(path, crate::mesh::Content::Geometry)?;
             if normalize {
                 crate::bvh::rays::normalize_mesh(&mut mesh);
             }

@@ -11,14 +11,14 @@ use crate::error::{Error, Result};
 
 /// The scene a harness command runs on: a scene file (`.json`, through
 /// [`crate::scene::Scene::load`]: its primitives, camera, image size and
-/// lights), or an `.obj` mesh normalised to the unit sphere (mean of the
+/// lights), or a mesh (`.obj`, `.ply`, optionally `.gz`) normalised to the unit sphere (mean of the
 /// vertices at the origin, farthest vertex at distance 1) with the default
 /// camera and point light.
 pub fn load_context(path: &Path) -> Result<raysets::RayContext> {
     let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
     match ext.as_deref() {
-        Some("obj") => {
-            let mut mesh = crate::mesh::load_obj(path)?;
+        _ if crate::mesh::is_mesh_file(path) => {
+            let mut mesh = crate::mesh::load_mesh(path, crate::mesh::Content::Geometry)?;
             parity::normalise_to_unit_sphere(&mut mesh.positions);
             Ok(raysets::RayContext::with_defaults(Arc::new(mesh.to_primitives())))
         }
@@ -38,6 +38,9 @@ pub fn load_context(path: &Path) -> Result<raysets::RayContext> {
                     .collect(),
             })
         }
-        _ => Err(Error::file(path, "unsupported scene file: expected a scene .json or a Wavefront .obj mesh")),
+        _ => Err(Error::file(
+            path,
+            "unsupported scene file: expected a scene .json or an .obj/.ply mesh (optionally .gz)",
+        )),
     }
 }
