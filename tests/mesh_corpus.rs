@@ -176,14 +176,14 @@ fn broken_files_exit_non_zero_with_the_line_never_a_panic() {
 #[test]
 fn every_mesh_holds_hit_parity_against_embree() {
     use rtdiff::accel::AccelConfig;
-    use rtdiff::harness::parity::{self, ParityOptions, Reference};
-    use rtdiff::harness::raysets::SetKind;
+    use rtdiff::verify::hits::{self as parity, ParityOptions, Reference};
+    use rtdiff::rays::SetKind;
     let dir = corpus();
     for (name, expected) in FILES {
         if expected.is_err() {
             continue;
         }
-        let ctx = rtdiff::harness::load_context(&dir.join(name)).unwrap();
+        let ctx = rtdiff::rays::load_context(&dir.join(name)).unwrap();
         let opts = ParityOptions {
             // Not the incoherent set: its origins are drawn inside the mesh's bounding box, which
             // for a flat mesh (concave_polygon.obj) is the mesh's own plane, so every ray starts on
