@@ -144,15 +144,18 @@ impl Mesh {
     }
 
     /// Validate, drop degenerate triangles, and take `file_normals` (indexed like
-    /// `positions`) when they are all finite and non-zero, else compute normals.
+    /// `positions`) where they are finite and non-zero; elsewhere, and when there are none,
+    /// area-weighted face normals.
     pub(crate) fn finish(&mut self, path: &Path, file_normals: Option<Vec<Vec3>>) -> Result<()> {
         self.validate(path)?;
-        match file_normals {
-            Some(n) if n.len() == self.positions.len() && n.iter().all(|n| n.is_finite() && *n != Vec3::ZERO) => {
-                self.normals = n;
-                self.file_normals = true;
+        self.compute_normals();
+        if let Some(n) = file_normals.filter(|n| n.len() == self.positions.len()) {
+            for (dst, src) in self.normals.iter_mut().zip(n) {
+                if src.is_finite() && src != Vec3::ZERO {
+                    *dst = src;
+                }
             }
-            _ => self.compute_normals(),
+            self.file_normals = true;
         }
         Ok(())
     }

@@ -197,8 +197,7 @@ fn check_line(line: &str) -> Result<Checked, Problem> {
 /// skipped, surrounding quotes removed, Windows separators turned into `/`.
 pub fn texture_file_name(written: &str) -> String {
     let mut rest = written.trim();
-    loop {
-        let Some(opt) = rest.split_whitespace().next().filter(|o| o.starts_with('-') && o.len() > 1) else { break };
+    while let Some(opt) = rest.split_whitespace().next().filter(|o| o.starts_with('-') && o.len() > 1) {
         // Option arity from the MTL specification; -o, -s and -t take 1 to 3 numbers.
         let (min, max) = match opt {
             "-mm" => (2, 2),

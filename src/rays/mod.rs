@@ -50,7 +50,10 @@ pub fn load_context(path: &Path) -> Result<RayContext> {
                     .collect(),
             })
         }
-        _ => Err(Error::file(path, "unsupported scene file: expected a scene .json or an .obj/.ply mesh (optionally .gz)")),
+        _ => Err(Error::file(
+            path,
+            "unsupported scene file: expected a scene .json or an .obj/.ply mesh (optionally .gz)",
+        )),
     }
 }
 
