@@ -71,21 +71,21 @@ fn missing_obj_file() {
 fn broken_obj() {
     let d = temp_dir("err-obj-broken");
     let s = scene_with_mesh(&d, "broken.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n");
-    fails_with(&d, &s, &[], &["broken.obj", "cannot parse OBJ"]);
+    fails_with(&d, &s, &[], &["broken.obj:4:", "'x' is not an index"]);
 }
 
 #[test]
 fn nan_vertex() {
     let d = temp_dir("err-nan");
     let s = scene_with_mesh(&d, "nan.obj", "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n");
-    fails_with(&d, &s, &[], &["nan.obj", "vertex 2", "non-finite"]);
+    fails_with(&d, &s, &[], &["nan.obj:2:", "'nan' is not a finite number"]);
 }
 
 #[test]
 fn infinite_vertex() {
     let d = temp_dir("err-inf");
     let s = scene_with_mesh(&d, "inf.obj", "v 0 0 0\nv 1 0 0\nv 0 inf 0\nf 1 2 3\n");
-    fails_with(&d, &s, &[], &["inf.obj", "vertex 3", "non-finite"]);
+    fails_with(&d, &s, &[], &["inf.obj:3:", "'inf' is not a finite number"]);
 }
 
 #[test]

@@ -21,13 +21,13 @@ use std::sync::Arc;
 use crate::error::{Error, Result};
 use crate::geometry::Primitives;
 
-/// An `.obj` mesh normalised to the unit sphere (mean of the vertices at the
+/// A mesh (`.obj`, `.ply`, optionally `.gz`) normalised to the unit sphere (mean of the vertices at the
 /// origin, farthest vertex at distance 1) by
 /// [`crate::geometry::normalize_to_unit_sphere`], the same function a scene's
 /// `"normalize": true` uses: `bench`, `parity`, `trace` and `render` trace the
 /// same vertices to the bit.
 pub fn load_normalized_mesh(path: &Path) -> Result<Arc<Primitives>> {
-    let mut mesh = crate::mesh::load_obj(path)?;
+    let mut mesh = crate::mesh::load_mesh(path, crate::mesh::Content::Geometry)?;
     crate::geometry::normalize_to_unit_sphere(&mut mesh.positions);
     if mesh.indices.is_empty() {
         return Err(Error::file(path, "the mesh has no (non-degenerate) triangles"));
@@ -37,12 +37,12 @@ pub fn load_normalized_mesh(path: &Path) -> Result<Arc<Primitives>> {
 
 /// The scene a harness command runs on: a scene file (`.json`, through
 /// [`crate::scene::Scene::load`]: its primitives, camera, image size and
-/// lights), or an `.obj` mesh normalised by [`load_normalized_mesh`] with the
+/// lights), or a mesh (`.obj`, `.ply`, optionally `.gz`) normalised by [`load_normalized_mesh`] with the
 /// default camera and point light.
 pub fn load_context(path: &Path) -> Result<RayContext> {
     let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
     match ext.as_deref() {
-        Some("obj") => Ok(RayContext::with_defaults(load_normalized_mesh(path)?)),
+        _ if crate::mesh::is_mesh_file(path) => Ok(RayContext::with_defaults(load_normalized_mesh(path)?)),
         Some("json") => {
             let scene = crate::scene::Scene::load(path)?;
             let camera = scene.camera.clone();
@@ -59,18 +59,21 @@ pub fn load_context(path: &Path) -> Result<RayContext> {
                     .collect(),
             })
         }
-        _ => Err(Error::file(path, "unsupported scene file: expected a scene .json or a Wavefront .obj mesh")),
+        _ => Err(Error::file(
+            path,
+            "unsupported scene file: expected a scene .json or an .obj/.ply mesh (optionally .gz)",
+        )),
     }
 }
 
-/// Load the primitives of `path`: an `.obj` mesh (with `normalize`, through
+/// Load the primitives of `path`: a mesh (`.obj`, `.ply`, optionally `.gz`; with `normalize`, through
 /// [`load_normalized_mesh`]; otherwise as is), anything else as a scene file.
 pub fn load_primitives(path: &Path, normalize: bool) -> Result<Arc<Primitives>> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match ext.as_deref() {
-        Some("obj") if normalize => load_normalized_mesh(path),
-        Some("obj") => {
-            let mesh = crate::mesh::load_obj(path)?;
+        _ if normalize && crate::mesh::is_mesh_file(path) => load_normalized_mesh(path),
+        _ if crate::mesh::is_mesh_file(path) => {
+            let mesh = crate::mesh::load_mesh(path, crate::mesh::Content::Geometry)?;
             if mesh.indices.is_empty() {
                 return Err(Error::file(path, "the mesh has no (non-degenerate) triangles"));
             }
