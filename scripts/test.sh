@@ -29,6 +29,9 @@ if [[ -x scripts/setup-embree.sh ]]; then
     features=(--features embree)
 fi
 
+scripts/mitsuba/setup.sh >&2   # .venv/ with mitsuba, openimageio, flip-evaluator (image cross-checks)
+export RTDIFF_REQUIRE_PYTHON=1
+
 say "cargo test ${features[*]:-}"
 log="$(mktemp)"
 trap 'rm -f "$log"' EXIT
