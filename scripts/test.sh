@@ -29,7 +29,11 @@ if [[ -x scripts/setup-embree.sh ]]; then
     features=(--features embree)
 fi
 
-scripts/mitsuba/setup.sh >&2   # .venv/ with mitsuba, openimageio, flip-evaluator (image cross-checks)
+# Mitsuba 3 + OpenImageIO + FLIP for the live export -> Mitsuba -> compare round trip
+# (tests/mitsuba_live.rs) and the metric cross-check (tests/image_crosscheck.rs); with
+# RTDIFF_REQUIRE_PYTHON=1 a missing environment fails those tests.
+say "mitsuba: setting up the Python environment"
+scripts/mitsuba/setup.sh >&2
 export RTDIFF_REQUIRE_PYTHON=1
 
 say "cargo test ${features[*]:-}"
