@@ -30,7 +30,8 @@ if [[ -x scripts/setup-embree.sh ]]; then
 fi
 
 # Mitsuba 3 + OpenImageIO + FLIP for the live export -> Mitsuba -> compare round trip
-# (tests/mitsuba_live.rs); with RTDIFF_REQUIRE_PYTHON=1 a missing environment fails the test.
+# (tests/mitsuba_live.rs) and the metric cross-check (tests/image_crosscheck.rs); with
+# RTDIFF_REQUIRE_PYTHON=1 a missing environment fails those tests.
 say "mitsuba: setting up the Python environment"
 scripts/mitsuba/setup.sh >&2
 export RTDIFF_REQUIRE_PYTHON=1

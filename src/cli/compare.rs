@@ -66,7 +66,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         println!("reference {}  test {}  ({}x{})", args.reference.display(), args.test.display(), m.width, m.height);
         println!("mae        {:.9e}", m.mae);
         println!("rmse       {:.9e}", m.rmse);
-        println!("psnr       {:.6} dB", m.psnr);
+        println!("psnr       {:.6} dB (peak {})", m.psnr, m.psnr_peak);
         println!("relmse     {:.9e}  (eps {})", m.rel_mse, m.rel_mse_epsilon);
         println!(
             "max error  {:.9e} at ({}, {}) channel {}",

@@ -24,8 +24,10 @@ use crate::film::Image;
 use crate::texture::linear_to_srgb;
 use crate::verify::image::metrics::same_size;
 
-/// FLIP's default viewing condition: 0.7 m from a 0.7 m wide 3840-pixel monitor.
-pub const DEFAULT_PIXELS_PER_DEGREE: f32 = nv_flip::DEFAULT_PIXELS_PER_DEGREE;
+/// FLIP's default viewing condition: 0.7 m from a 0.7 m wide 3840-pixel
+/// monitor, 0.7 * (3840 / 0.7) * pi / 180 = 67.02 pixels per degree (as
+/// flip-evaluator computes it; `nv_flip::DEFAULT_PIXELS_PER_DEGREE` rounds it to 67).
+pub const DEFAULT_PIXELS_PER_DEGREE: f32 = 3840.0 * std::f32::consts::PI / 180.0;
 
 /// FLIP's ACES fit `(x^2 a + x b + c) / (x^2 d + x e + f)` (0.6 = pre-exposure cancellation).
 const ACES: [f32; 6] = [0.6 * 0.6 * 2.51, 0.6 * 0.03, 0.0, 0.6 * 0.6 * 2.43, 0.6 * 0.59, 0.14];
@@ -108,8 +110,8 @@ pub fn flip(reference: &Image, test: &Image, mode: FlipMode, pixels_per_degree: 
 }
 
 /// HDR-FLIP's automatic exposure range for `reference` (see the module doc).
-/// When the median luminance is 0 (mostly black images) the stop exposure
-/// would be infinite: it is then taken from the smallest non-zero luminance.
+/// The median luminance is clamped below at f32::EPSILON (as flip-evaluator
+/// does), so that mostly black images get a finite stop exposure.
 pub fn hdr_exposures(reference: &Image) -> Exposures {
     // Solve (a - t d) x^2 + (b - t e) x + (c - t f) = 0 for the larger root x_max, t = 0.85.
     let t = 0.85f32;
@@ -120,11 +122,9 @@ pub fn hdr_exposures(reference: &Image) -> Exposures {
     y.sort_by(f32::total_cmp);
     let y_max = *y.last().unwrap_or(&0.0);
     let mid = (y.len() / 2).max(1) - 1;
-    let mut y_median = 0.5 * (y[mid] + y[(mid + 1).min(y.len() - 1)]);
-    if y_median <= 0.0 {
-        y_median = y.iter().copied().find(|&v| v > 0.0).unwrap_or(1.0);
-    }
-    let y_max = if y_max > 0.0 { y_max } else { 1.0 };
+    let y_median = 0.5 * (y[mid] + y[(mid + 1).min(y.len() - 1)]);
+    let y_median = y_median.max(f32::EPSILON);
+    let y_max = y_max.max(f32::EPSILON);
     let start = (x_max / y_max).log2();
     let stop = (x_max / y_median).log2();
     let count = ((stop - start).ceil() as u32).max(2);

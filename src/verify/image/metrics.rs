@@ -6,8 +6,10 @@
 //! sums over every pixel and channel, accumulated in f64):
 //! - MAE = sum |d| / (n c) and RMSE = sqrt(sum d^2 / (n c)): OpenImageIO's
 //!   `ImageBufAlgo.compare` `meanerror` and `rms_error`.
-//! - PSNR = 20 log10(1 / RMSE) (OpenImageIO's definition: peak 1 whatever the
-//!   range; infinite when the images are equal).
+//! - PSNR = 20 log10(peak / RMSE) with peak = max(1, largest |sample| of
+//!   either image): OpenImageIO's `PSNR` exactly (measured with OIIO 3.2:
+//!   20 log10(1 / RMSE) for images within [0, 1], the brightest sample's
+//!   magnitude as peak for HDR images); infinite when the images are equal.
 //! - relMSE = sum d^2 / (ref^2 + eps) / (n c) with eps = [`REL_MSE_EPSILON`]
 //!   (1e-2, the usual choice in the denoising literature, so near-black
 //!   pixels do not dominate).
@@ -57,8 +59,10 @@ pub struct Metrics {
     pub mae: f64,
     /// Root mean squared error over pixels and channels.
     pub rmse: f64,
-    /// 20 log10(1 / RMSE) in dB (infinite, `null` in JSON, when RMSE is 0).
+    /// 20 log10(peak / RMSE) in dB (infinite, `null` in JSON, when RMSE is 0).
     pub psnr: f64,
+    /// PSNR's peak: max(1, largest |sample| of either image).
+    pub psnr_peak: f64,
     /// Mean of d^2 / (ref^2 + eps).
     pub rel_mse: f64,
     /// The eps of `rel_mse`.
@@ -131,6 +135,7 @@ pub fn compare(reference: &Image, test: &Image, opts: &CompareOptions) -> Result
     let (mut max_err, mut max_i, mut max_c) = (0f64, 0usize, 0u32);
     let (mut max_rel, mut max_rel_i) = (0f64, 0usize);
     let (mut over, mut over_rel) = (0u64, 0u64);
+    let mut peak = 1f64;
     for (i, (r, t)) in reference.pixels.iter().zip(&test.pixels).enumerate() {
         let mut pixel_over = false;
         for c in 0..3 {
@@ -142,6 +147,7 @@ pub fn compare(reference: &Image, test: &Image, opts: &CompareOptions) -> Result
             sum_rel += d * d / (rv * rv + REL_MSE_EPSILON);
             sum_r += rv;
             sum_t += tv;
+            peak = peak.max(rv.abs()).max(tv.abs());
             if ad > max_err {
                 (max_err, max_i, max_c) = (ad, i, c as u32);
             }
@@ -162,7 +168,8 @@ pub fn compare(reference: &Image, test: &Image, opts: &CompareOptions) -> Result
         height: reference.height,
         mae: sum_abs / samples,
         rmse,
-        psnr: if rmse > 0.0 { 20.0 * (1.0 / rmse).log10() } else { f64::INFINITY },
+        psnr: if rmse > 0.0 { 20.0 * (peak / rmse).log10() } else { f64::INFINITY },
+        psnr_peak: peak,
         rel_mse: sum_rel / samples,
         rel_mse_epsilon: REL_MSE_EPSILON,
         max_error: max_err,
@@ -211,6 +218,11 @@ mod tests {
         assert_eq!((m.over_threshold, m.over_rel_threshold), (1, 1));
         assert!((m.over_threshold_fraction - 0.125).abs() < 1e-15);
         assert!((m.max_rel_error - d / 0.5).abs() < 1e-6);
+        // HDR: the peak is the largest magnitude of either image.
+        let hdr = img(4, 2, |x, _| if x == 0 { Vec3::new(-3.0, 0.5, 0.5) } else { Vec3::splat(0.5) });
+        let mh = compare(&r, &hdr, &CompareOptions::default()).unwrap();
+        assert_eq!(mh.psnr_peak, 3.0);
+        assert!((mh.psnr - 20.0 * (3.0 / mh.rmse).log10()).abs() < 1e-12);
         let same = compare(&r, &r, &CompareOptions::default()).unwrap();
         assert_eq!((same.rmse, same.psnr, same.over_threshold), (0.0, f64::INFINITY, 0));
     }
