@@ -18,6 +18,7 @@ pub mod geometry;
 pub mod harness;
 pub mod integrator;
 pub mod light;
+pub mod limits;
 pub mod material;
 pub mod mesh;
 pub mod post;

@@ -77,6 +77,10 @@ fn render_pixel(scene: &Scene, integ: &dyn Integrator, plan: &Plan, x: u32, y: u
 
 /// Render `scene` with hits from `tracer`.
 pub fn render(scene: &Scene, tracer: &dyn Tracer, opts: &RenderOptions) -> Result<RenderResult> {
+    if let Some(n) = opts.threads {
+        crate::limits::check_flag("--threads", n, 1, crate::limits::MAX_THREADS)?;
+    }
+    crate::scene::validate::check_render_work(scene)?;
     let plan = scene.plan();
     let integ = Whitted::new(scene, tracer, plan);
     let (w, h) = (scene.width, scene.height);
@@ -108,7 +112,6 @@ pub fn render(scene: &Scene, tracer: &dyn Tracer, opts: &RenderOptions) -> Resul
             .collect::<Vec<Counters>>()
     };
     let rows = match opts.threads {
-        Some(0) => return Err(Error::Invalid("--threads must be at least 1".into())),
         Some(n) => rayon::ThreadPoolBuilder::new()
             .num_threads(n)
             .build()

@@ -9,3 +9,4 @@ pub mod parity;
 mod race;
 pub mod render;
 pub mod trace;
+pub mod warnings;

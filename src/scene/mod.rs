@@ -2,6 +2,7 @@
 //! camera that the renderer and every tracer use.
 
 pub mod file;
+pub mod validate;
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -105,11 +106,6 @@ impl std::fmt::Debug for Scene {
     }
 }
 
-fn read_scene_file(path: &Path) -> Result<SceneFile> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, &e))?;
-    serde_json::from_str(&text).map_err(|e| Error::file(path, format!("invalid scene: {e}")))
-}
-
 impl Scene {
     /// Load a scene file.
     pub fn load(path: &Path) -> Result<Self> {
@@ -118,7 +114,7 @@ impl Scene {
 
     /// Load a scene file and apply command-line overrides.
     pub fn load_with(path: &Path, ov: &Overrides) -> Result<Self> {
-        let mut file = read_scene_file(path)?;
+        let mut file = validate::read_scene_file(path)?;
         if let Some(w) = ov.width {
             file.image.width = w;
         }
@@ -151,6 +147,7 @@ impl Scene {
     /// Build a scene from a parsed file; relative paths resolve against `dir`,
     /// and errors name `path`.
     pub fn from_file(file: &SceneFile, dir: &Path, path: &Path) -> Result<Self> {
+        validate::check_file(file, path)?;
         let bad = |msg: String| Error::file(path, msg);
         let img = &file.image;
         if img.width == 0 || img.height == 0 {
@@ -241,6 +238,7 @@ impl Scene {
             let mut mesh = crate::mesh::load_obj(&obj_path)?;
             degenerate_skipped += mesh.degenerate_skipped;
             place_mesh(&mut mesh, spec);
+            validate::check_mesh_bounds(path, &format!("meshes[{mi}]"), &spec.file, &mesh.positions)?;
             let forced = match &spec.material {
                 Some(name) => Some(lookup(name, &format!("mesh {} ({})", mi + 1, spec.file))?),
                 None => None,
