@@ -14,6 +14,7 @@ pub mod embree;
 pub mod error;
 pub mod features;
 pub mod film;
+pub mod fuzz;
 pub mod geometry;
 pub mod harness;
 pub mod integrator;

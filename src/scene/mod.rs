@@ -208,7 +208,10 @@ impl Scene {
                 return Err(bad(format!("material '{name}': transparency must be in [0, 1]")));
             }
             let kd_texture = match &m.kd_texture {
-                Some(t) => Some(load_texture(&dir.join(t), m.texture_raw)?),
+                Some(t) => Some(
+                    load_texture(&dir.join(t), m.texture_raw)
+                        .map_err(|e| bad(format!("materials.{name}.kd_texture: {e}")))?,
+                ),
                 None => None,
             };
             let mat = Material {
@@ -235,7 +238,7 @@ impl Scene {
         let mut degenerate_skipped = 0;
         for (mi, spec) in file.meshes.iter().enumerate() {
             let obj_path = dir.join(&spec.file);
-            let mut mesh = crate::mesh::load_obj(&obj_path)?;
+            let mut mesh = crate::mesh::load_obj(&obj_path).map_err(|e| bad(format!("meshes[{mi}].file: {e}")))?;
             degenerate_skipped += mesh.degenerate_skipped;
             place_mesh(&mut mesh, spec);
             validate::check_mesh_bounds(path, &format!("meshes[{mi}]"), &spec.file, &mesh.positions)?;
@@ -248,7 +251,8 @@ impl Scene {
                 let id = match spec.material_overrides.get(&m.name) {
                     Some(name) => lookup(name, &format!("mesh {} material override", mi + 1))?,
                     None => {
-                        let mat = convert_mtl(m, file.shading_model, &mut load_texture)?;
+                        let mat = convert_mtl(m, file.shading_model, &mut load_texture)
+                            .map_err(|e| bad(format!("meshes[{mi}] ({}): {e}", spec.file)))?;
                         materials.push(mat);
                         materials.len() as u32 - 1
                     }
