@@ -28,6 +28,8 @@ enum Command {
     /// Trace rays from a CSV file and write the hits as CSV.
     #[command(after_help = rtdiff::limits::HELP)]
     Trace(rtdiff::cli::trace::TraceArgs),
+    /// Compare two images (EXR or PNG): MAE, RMSE, relMSE, PSNR, max error, pixels over thresholds, FLIP.
+    Compare(rtdiff::cli::compare::CompareArgs),
 }
 
 fn main() {
@@ -39,6 +41,7 @@ fn main() {
         Command::Bench(a) => rtdiff::cli::bench::run(a),
         Command::Parity(a) => rtdiff::cli::parity::run(a),
         Command::Trace(a) => rtdiff::cli::trace::run(a),
+        Command::Compare(a) => rtdiff::cli::compare::run(a),
     };
     if let Err(e) = result {
         eprintln!("rtdiff: error: {e}");

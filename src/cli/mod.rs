@@ -3,10 +3,9 @@
 
 pub mod bench;
 pub mod bvh_stats;
+pub mod compare;
 pub mod debug;
 pub mod parity;
-#[cfg(feature = "embree")]
-mod race;
 pub mod render;
 pub mod trace;
 pub mod warnings;

@@ -77,7 +77,7 @@ pub fn parse_rays(path: &Path, text: &str) -> Result<Vec<Ray>> {
 
 /// Run `rtdiff trace`.
 pub fn run(args: &TraceArgs) -> Result<()> {
-    let (ctx, skipped) = crate::harness::load_context_counted(&args.scene)?;
+    let (ctx, skipped) = crate::rays::load_context_counted(&args.scene)?;
     super::warnings::degenerate(&args.scene, &ctx.prims, skipped);
     let size = std::fs::metadata(&args.rays).map_err(|e| Error::io(&args.rays, &e))?.len();
     if size > crate::limits::MAX_RAY_FILE_BYTES {

@@ -391,18 +391,18 @@ impl Runner {
     }
 
     fn obj(&self, path: &Path) -> Result<Outcome> {
-        let ctx = crate::harness::load_context(path)?;
-        let opts = crate::harness::parity::ParityOptions {
-            sets: crate::harness::raysets::SetKind::ALL.to_vec(),
+        let ctx = crate::rays::load_context(path)?;
+        let opts = crate::verify::hits::ParityOptions {
+            sets: crate::rays::SetKind::ALL.to_vec(),
             count: 16,
             seed: 1,
-            reference: crate::harness::parity::Reference::Brute,
+            reference: crate::verify::hits::Reference::Brute,
             stress: false,
             max_examples: 0,
             sweep_count: None,
             variants: vec![AccelConfig::default()],
         };
-        crate::harness::parity::run(&ctx, &opts)?;
+        crate::verify::hits::run(&ctx, &opts)?;
         Ok(Outcome::Accepted { ran: true })
     }
 

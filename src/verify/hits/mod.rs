@@ -1,0 +1,13 @@
+//! Hit parity against an independent oracle (Embree or brute force): the
+//! error bounds two correct tracers may differ by ([`bounds`]), the
+//! classification of every disagreement ([`classify`]), the run over the ray
+//! sets of [`crate::rays`] ([`run`]) and its typed report ([`report`]).
+
+pub mod bounds;
+pub mod classify;
+pub mod report;
+pub mod run;
+
+pub use bounds::K_ROUNDING;
+pub use report::{Example, ParityReport, SetReport, StressRow, VariantStats, format_report};
+pub use run::{ParityOptions, Reference, config_label, native_variants, run};
