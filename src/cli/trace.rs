@@ -20,7 +20,7 @@ use crate::geometry::Ray;
 /// Arguments of `rtdiff trace`.
 #[derive(clap::Args, Debug)]
 pub struct TraceArgs {
-    /// Scene: a scene .json file, or a Wavefront .obj mesh (normalised to the unit sphere, like `rtdiff parity`).
+    /// Scene: a scene .json file, or a mesh: .obj, .ply, optionally .gz (normalised to the unit sphere, like `rtdiff parity`).
     pub scene: PathBuf,
     /// Rays, CSV: ox,oy,oz,dx,dy,dz,tnear,tfar.
     #[arg(long)]

@@ -23,7 +23,7 @@ use crate::geometry::Primitives;
 
 /// The scene a harness command runs on: a scene file (`.json`, through
 /// [`crate::scene::Scene::load`]: its primitives, camera, image size and
-/// lights), or an `.obj` mesh normalised to the unit sphere (mean of the
+/// lights), or a mesh (`.obj`, `.ply`, optionally `.gz`) normalised to the unit sphere (mean of the
 /// vertices at the origin, farthest vertex at distance 1) with the default
 /// camera and point light.
 pub fn load_context(path: &Path) -> Result<RayContext> {
@@ -34,8 +34,8 @@ pub fn load_context(path: &Path) -> Result<RayContext> {
 pub fn load_context_counted(path: &Path) -> Result<(RayContext, usize)> {
     let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
     match ext.as_deref() {
-        Some("obj") => {
-            let mut mesh = crate::mesh::load_obj(path)?;
+        _ if crate::mesh::is_mesh_file(path) => {
+            let mut mesh = crate::mesh::load_mesh(path, crate::mesh::Content::Geometry)?;
             workload::normalise_to_unit_sphere(&mut mesh.positions);
             Ok((RayContext::with_defaults(Arc::new(mesh.to_primitives())), mesh.degenerate_skipped))
         }
@@ -57,17 +57,20 @@ pub fn load_context_counted(path: &Path) -> Result<(RayContext, usize)> {
             };
             Ok((ctx, skipped))
         }
-        _ => Err(Error::file(path, "unsupported scene file: expected a scene .json or a Wavefront .obj mesh")),
+        _ => Err(Error::file(
+            path,
+            "unsupported scene file: expected a scene .json or an .obj/.ply mesh (optionally .gz)",
+        )),
     }
 }
 
-/// Load the primitives of `path`: an `.obj` mesh directly, anything else as a scene file.
+/// Load the primitives of `path`: a mesh (`.obj`, `.ply`, optionally `.gz`) directly, anything else as a scene file.
 /// With `normalize`, an OBJ mesh is centred on its vertex mean and scaled into the unit sphere.
 pub fn load_primitives(path: &Path, normalize: bool) -> Result<Arc<Primitives>> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match ext.as_deref() {
-        Some("obj") => {
-            let mut mesh = crate::mesh::load_obj(path)?;
+        _ if crate::mesh::is_mesh_file(path) => {
+            let mut mesh = crate::mesh::load_mesh(path, crate::mesh::Content::Geometry)?;
             if normalize {
                 normalize_mesh(&mut mesh);
             }

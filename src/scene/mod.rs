@@ -93,6 +93,8 @@ pub struct Scene {
     pub accel: AccelConfig,
     /// Zero-area triangles dropped while loading.
     pub degenerate_skipped: usize,
+    /// Problems in the mesh files that did not stop the load (`file:line: what`).
+    pub warnings: Vec<String>,
 }
 
 impl std::fmt::Debug for Scene {
@@ -236,10 +238,13 @@ impl Scene {
         let mut prims = Primitives::default();
         let mut triangle_shading = Vec::new();
         let mut degenerate_skipped = 0;
+        let mut warnings = Vec::new();
         for (mi, spec) in file.meshes.iter().enumerate() {
             let obj_path = dir.join(&spec.file);
-            let mut mesh = crate::mesh::load_obj(&obj_path).map_err(|e| bad(format!("meshes[{mi}].file: {e}")))?;
+            let mut mesh = crate::mesh::load_mesh(&obj_path, crate::mesh::Content::WithMaterials)
+                .map_err(|e| bad(format!("meshes[{mi}].file: {e}")))?;
             degenerate_skipped += mesh.degenerate_skipped;
+            warnings.append(&mut mesh.warnings);
             place_mesh(&mut mesh, spec);
             validate::check_mesh_bounds(path, &format!("meshes[{mi}]"), &spec.file, &mesh.positions)?;
             let forced = match &spec.material {
@@ -335,6 +340,7 @@ impl Scene {
             params: file.params,
             accel,
             degenerate_skipped,
+            warnings,
         })
     }
 
@@ -409,9 +415,10 @@ fn convert_mtl(
     model: ShadingModelKind,
     load_texture: &mut impl FnMut(&Path, bool) -> Result<Arc<Texture>>,
 ) -> Result<Material> {
-    let kd_texture = match &m.map_kd {
-        Some(p) => Some(load_texture(p, false)?),
-        None => None,
+    let kd_texture = match (&m.map_kd, &m.map_kd_source) {
+        (Some(p), Some(src)) => Some(load_texture(p, false).map_err(|e| texture_error(src, e))?),
+        (Some(p), None) => Some(load_texture(p, false)?),
+        _ => None,
     };
     Ok(Material {
         name: m.name.clone(),
@@ -422,4 +429,11 @@ fn convert_mtl(
         kd_texture,
         model,
     })
+}
+
+/// A texture named in an MTL file that cannot be loaded: the error names the MTL line,
+/// the name as written and the paths tried.
+fn texture_error(src: &crate::mesh::TextureSource, e: Error) -> Error {
+    let tried: Vec<String> = src.tried.iter().map(|p| p.display().to_string()).collect();
+    Error::at(&src.mtl, src.line, format!("map_Kd '{}': {e} (tried {})", src.written, tried.join(", ")))
 }

@@ -182,6 +182,12 @@ impl Checker<'_> {
 pub fn check_file(file: &SceneFile, path: &Path) -> Result<()> {
     let c = Checker { path };
     let img = &file.image;
+    if img.width == 0 || img.height == 0 {
+        return Err(c.err(
+            "image",
+            format!("image size {}x{} is empty: width and height must be at least 1", img.width, img.height),
+        ));
+    }
     c.count("image.width", img.width, 1, limits::MAX_IMAGE_SIDE)?;
     c.count("image.height", img.height, 1, limits::MAX_IMAGE_SIDE)?;
     let pixels = img.width as u64 * img.height as u64;

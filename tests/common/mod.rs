@@ -10,7 +10,7 @@ use glam::Vec3;
 use rtdiff::accel::{self, AccelConfig, Builder, Traversal};
 use rtdiff::film::Image;
 use rtdiff::geometry::{Primitives, Ray, Sphere, Triangle};
-use rtdiff::mesh::{Mesh, load_obj};
+use rtdiff::mesh::{Content, Mesh, load_mesh as load_mesh_file};
 use rtdiff::render::{RenderOptions, RenderResult, render};
 use rtdiff::rng::Pcg32;
 use rtdiff::scene::{Scene, SceneFile};
@@ -90,7 +90,7 @@ pub fn assert_close(a: Vec3, b: Vec3, rel: f32) {
 /// Load `assets/NAME.obj`.
 pub fn load_mesh(name: &str) -> Mesh {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets").join(format!("{name}.obj"));
-    load_obj(&path).unwrap_or_else(|e| panic!("{e}"))
+    load_mesh_file(&path, Content::WithMaterials).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Every builder x traversal configuration (watertight triangle test).

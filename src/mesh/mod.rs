@@ -1,10 +1,94 @@
-//! Loading triangle meshes from Wavefront OBJ (+ MTL) files, with validation.
+//! Triangle meshes as users have them: Wavefront OBJ (+ MTL) and PLY, plain or
+//! gzip-compressed, in any of the text encodings exporters write. [`load_mesh`] is the
+//! one entry point; every reader returns the in-memory [`Mesh`] defined here.
+
+pub mod compressed;
+pub mod encoding;
+pub mod mtl;
+pub mod obj;
+pub mod ply;
 
 use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3};
 
 use crate::error::{Error, Result};
+
+/// What a caller needs from a mesh file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Content {
+    /// Triangles only: material libraries are not opened at all (`parity`, `trace`, `bench`, `bvh-stats`).
+    Geometry,
+    /// Triangles, normals, texture coordinates and the materials of the MTL libraries (`render`).
+    WithMaterials,
+}
+
+/// A mesh file format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// Wavefront OBJ (`.obj`, `.obj.gz`).
+    Obj,
+    /// Stanford PLY (`.ply`, `.ply.gz`), ASCII or binary.
+    Ply,
+}
+
+impl Format {
+    /// The format named by `path`'s extension (a trailing `.gz` is looked through), if any.
+    pub fn of(path: &Path) -> Option<Self> {
+        let inner = if compressed::is_gzip_name(path) { Path::new(path.file_stem()?) } else { path };
+        match inner.extension()?.to_str()?.to_ascii_lowercase().as_str() {
+            "obj" => Some(Self::Obj),
+            "ply" => Some(Self::Ply),
+            _ => None,
+        }
+    }
+}
+
+/// True when `path` names a mesh file rtdiff reads (`.obj`, `.ply`, either with `.gz`).
+pub fn is_mesh_file(path: &Path) -> bool {
+    Format::of(path).is_some()
+}
+
+/// Load the mesh at `path` (OBJ or PLY, optionally gzip-compressed). Faces are triangulated
+/// as fans from their first vertex; zero-area triangles are dropped and counted in
+/// [`Mesh::degenerate_skipped`]. Errors name the file and, for text, the line and token;
+/// problems with materials are [`Mesh::warnings`], never errors.
+pub fn load_mesh(path: &Path, content: Content) -> Result<Mesh> {
+    if let Err(e) = std::fs::metadata(path) {
+        return Err(Error::io(path, &e));
+    }
+    let bytes = compressed::read_bytes(path)?;
+    if bytes.iter().all(u8::is_ascii_whitespace) {
+        return Err(Error::file(path, "the file is empty: no vertices, no faces"));
+    }
+    let format = match Format::of(path) {
+        Some(f) => f,
+        None if bytes.starts_with(b"ply") => Format::Ply,
+        None => {
+            return Err(Error::file(
+                path,
+                "unsupported mesh file: expected a Wavefront .obj or a Stanford .ply (either may end in .gz)",
+            ));
+        }
+    };
+    match format {
+        Format::Obj => obj::load(path, encoding::decode_text(bytes).0, content),
+        Format::Ply => ply::load(path, &bytes, content),
+    }
+}
+
+/// Where a material's texture was named: for errors that point at the MTL line.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureSource {
+    /// The material library.
+    pub mtl: PathBuf,
+    /// Line of the `map_Kd` statement (from 1).
+    pub line: usize,
+    /// The statement's arguments as written.
+    pub written: String,
+    /// The paths looked at, in order.
+    pub tried: Vec<PathBuf>,
+}
 
 /// A material as read from an MTL file.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -21,6 +105,8 @@ pub struct MtlMaterial {
     pub opacity: Option<f32>,
     /// Diffuse texture `map_Kd`, resolved relative to the MTL file.
     pub map_kd: Option<PathBuf>,
+    /// Where `map_kd` was written, when it came from an MTL file.
+    pub map_kd_source: Option<TextureSource>,
 }
 
 /// An indexed triangle mesh. `normals` and `uvs`, when present, are indexed like `positions`.
@@ -42,6 +128,8 @@ pub struct Mesh {
     pub materials: Vec<MtlMaterial>,
     /// Number of zero-area triangles that were dropped.
     pub degenerate_skipped: usize,
+    /// Problems that did not stop the load, each `file:line: what` (materials, mixed faces).
+    pub warnings: Vec<String>,
 }
 
 impl Mesh {
@@ -53,6 +141,23 @@ impl Mesh {
         m.validate(path)?;
         m.compute_normals();
         Ok(m)
+    }
+
+    /// Validate, drop degenerate triangles, and take `file_normals` (indexed like
+    /// `positions`) where they are finite and non-zero; elsewhere, and when there are none,
+    /// area-weighted face normals.
+    pub(crate) fn finish(&mut self, path: &Path, file_normals: Option<Vec<Vec3>>) -> Result<()> {
+        self.validate(path)?;
+        self.compute_normals();
+        if let Some(n) = file_normals.filter(|n| n.len() == self.positions.len()) {
+            for (dst, src) in self.normals.iter_mut().zip(n) {
+                if src.is_finite() && src != Vec3::ZERO {
+                    *dst = src;
+                }
+            }
+            self.file_normals = true;
+        }
+        Ok(())
     }
 
     fn validate(&mut self, path: &Path) -> Result<()> {
@@ -119,84 +224,6 @@ impl Mesh {
     }
 }
 
-/// Load an OBJ file (and its MTL library, if any). Faces are triangulated;
-/// zero-area triangles are dropped and counted in [`Mesh::degenerate_skipped`].
-pub fn load_obj(path: &Path) -> Result<Mesh> {
-    if let Err(e) = std::fs::metadata(path) {
-        return Err(Error::io(path, &e));
-    }
-    let opts = tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true };
-    let (models, mtl) = tobj::load_obj(path, &opts).map_err(|e| Error::file(path, format!("cannot parse OBJ: {e}")))?;
-    let dir = path.parent().unwrap_or(Path::new("."));
-    let materials = match mtl {
-        Ok(ms) => ms.into_iter().map(|m| convert_material(m, dir)).collect(),
-        Err(tobj::LoadError::GenericFailure) if models.iter().all(|m| m.mesh.material_id.is_none()) => Vec::new(),
-        Err(e) => return Err(Error::file(path, format!("cannot load its material library: {e}"))),
-    };
-    let mut mesh = Mesh { materials, ..Default::default() };
-    let all_normals = models.iter().all(|m| !m.mesh.normals.is_empty() || m.mesh.positions.is_empty());
-    let all_uvs = models.iter().all(|m| !m.mesh.texcoords.is_empty() || m.mesh.positions.is_empty());
-    let mut normals = Vec::new();
-    let mut uvs = Vec::new();
-    for model in &models {
-        let m = &model.mesh;
-        let base = mesh.positions.len() as u32;
-        mesh.positions.extend(m.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])));
-        if all_normals {
-            normals.extend(m.normals.chunks_exact(3).map(|n| Vec3::new(n[0], n[1], n[2]).normalize_or_zero()));
-        }
-        if all_uvs {
-            uvs.extend(m.texcoords.chunks_exact(2).map(|t| Vec2::new(t[0], t[1])));
-        }
-        if m.indices.len() % 3 != 0 {
-            return Err(Error::file(
-                path,
-                format!("object '{}' has a face that is not a triangle after triangulation", model.name),
-            ));
-        }
-        let mat = m.material_id.map(|i| i as u32);
-        if let Some(i) = mat
-            && i as usize >= mesh.materials.len()
-        {
-            return Err(Error::file(
-                path,
-                format!("object '{}' uses a material missing from its MTL file", model.name),
-            ));
-        }
-        for t in m.indices.chunks_exact(3) {
-            mesh.indices.push([base + t[0], base + t[1], base + t[2]]);
-            mesh.face_material.push(mat);
-        }
-    }
-    if mesh.indices.is_empty() {
-        return Err(Error::file(path, "contains no triangles"));
-    }
-    if all_uvs && !uvs.is_empty() {
-        mesh.uvs = Some(uvs);
-    }
-    mesh.validate(path)?;
-    if all_normals && !normals.is_empty() && normals.iter().all(|n| n.is_finite() && *n != Vec3::ZERO) {
-        mesh.normals = normals;
-        mesh.file_normals = true;
-    } else {
-        mesh.compute_normals();
-    }
-    Ok(mesh)
-}
-
-fn convert_material(m: tobj::Material, dir: &Path) -> MtlMaterial {
-    let opacity =
-        m.dissolve.or_else(|| m.unknown_param.get("Tr").and_then(|t| t.trim().parse::<f32>().ok()).map(|tr| 1.0 - tr));
-    MtlMaterial {
-        name: m.name,
-        kd: m.diffuse.map(Vec3::from),
-        ks: m.specular.map(Vec3::from),
-        ns: m.shininess,
-        opacity,
-        map_kd: m.diffuse_texture.map(|t| dir.join(t.trim())),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -212,20 +239,20 @@ mod tests {
     #[test]
     fn nan_vertex_is_an_error_naming_the_file() {
         let p = write("nan.obj", "v 0 0 0\nv 1 0 nan\nv 0 1 0\nf 1 2 3\n");
-        let e = load_obj(&p).unwrap_err().to_string();
-        assert!(e.contains("nan.obj") && e.contains("vertex 2"), "{e}");
+        let e = load_mesh(&p, Content::WithMaterials).unwrap_err().to_string();
+        assert!(e.contains("nan.obj:2: 'nan' is not a finite number"), "{e}");
     }
 
     #[test]
     fn degenerate_triangles_are_skipped_and_counted() {
         let p = write("degen.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nf 1 2 4\n");
-        let m = load_obj(&p).unwrap();
+        let m = load_mesh(&p, Content::WithMaterials).unwrap();
         assert_eq!((m.indices.len(), m.degenerate_skipped), (1, 1));
     }
 
     #[test]
     fn missing_file_says_not_found() {
-        let e = load_obj(Path::new("/nonexistent/assets/x.obj")).unwrap_err().to_string();
+        let e = load_mesh(Path::new("/nonexistent/assets/x.obj"), Content::Geometry).unwrap_err().to_string();
         assert!(e.contains("not found") && e.contains("fetch-assets.sh"), "{e}");
     }
 }
