@@ -15,8 +15,10 @@
 //! allocator refuses to exceed `--alloc-cap-mb` and exits after reporting);
 //! after a death it restarts the child past the culprit. Every `--spawn-every`
 //! inputs the worker also runs the `rtdiff` binary on the input and checks its
-//! exit code (0, 1 or clap's 2; never a signal or 101) and message. Each
-//! failure is printed with its replay command.
+//! exit code (0, 1 or clap's 2; never a signal or 101) and message. Every
+//! input is loaded (validated); every `--deep-every`-th accepted one is also
+//! built, rendered, traced or run through parity. Each failure is printed
+//! with its replay command.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::collections::BTreeMap;
@@ -93,6 +95,7 @@ struct Opts {
     alloc_cap_mb: usize,
     spawn_every: u64,
     jobs: u64,
+    deep_every: u64,
     worker: bool,
     replay: Option<(u64, u64)>,
     bin: PathBuf,
@@ -112,6 +115,7 @@ fn parse_opts() -> Result<Opts, String> {
         alloc_cap_mb: 3072,
         spawn_every: 2000,
         jobs: 1,
+        deep_every: 8,
         worker: false,
         replay: None,
         bin,
@@ -130,6 +134,7 @@ fn parse_opts() -> Result<Opts, String> {
             "--time-limit" => o.time_limit = num(i + 1)?.parse().map_err(|e| bad(&e))?,
             "--alloc-cap-mb" => o.alloc_cap_mb = num(i + 1)?.parse().map_err(|e| bad(&e))?,
             "--spawn-every" => o.spawn_every = num(i + 1)?.parse().map_err(|e| bad(&e))?,
+            "--deep-every" => o.deep_every = num(i + 1)?.parse().map_err(|e| bad(&e))?,
             "--jobs" => o.jobs = num(i + 1)?.parse().map_err(|e| bad(&e))?,
             "--bin" => o.bin = PathBuf::from(num(i + 1)?),
             "--replay" => {
@@ -258,7 +263,8 @@ fn worker(o: &Opts) {
             let _ = w.flush();
         }
         CURRENT.store(i, Ordering::Relaxed);
-        let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| runner.run(&input)));
+        let deep = o.deep_every <= 1 || i % o.deep_every == 0;
+        let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| runner.run_with(&input, deep)));
         let line = match r {
             Ok(Ok(outcome)) => {
                 let spawned = if o.spawn_every > 0 && i % o.spawn_every == 0 {
@@ -320,6 +326,7 @@ fn run_range(o: &Opts, start: u64, end: u64) -> Result<Tally, String> {
             .args(["--worker", "--seed", &o.seed.to_string(), "--start", &next.to_string()])
             .args(["--count", &(end - next).to_string(), "--spawn-every", &o.spawn_every.to_string()])
             .args(["--alloc-cap-mb", &o.alloc_cap_mb.to_string(), "--time-limit", &o.time_limit.to_string()])
+            .args(["--deep-every", &o.deep_every.to_string()])
             .arg("--bin")
             .arg(&o.bin)
             .stdout(Stdio::piped())
@@ -414,7 +421,7 @@ fn supervise(o: &Opts) -> i32 {
     let corpus = Corpus::load(&o.root).unwrap_or_else(|e| panic!("corpus: {e}"));
     println!(
         "fuzz_inputs: seed {}, inputs {}..{} ({} systematic truncations first), {} workers, time limit {} s, \
-         allocation cap {} MiB, binary spawned every {} inputs ({})",
+         allocation cap {} MiB, binary spawned every {} inputs ({}); every {}th input is also built, rendered, traced or run through parity",
         o.seed,
         o.start,
         end,
@@ -423,7 +430,8 @@ fn supervise(o: &Opts) -> i32 {
         o.time_limit,
         o.alloc_cap_mb,
         o.spawn_every,
-        o.bin.display()
+        o.bin.display(),
+        o.deep_every
     );
     let jobs = o.jobs.max(1);
     let per = o.count.div_ceil(jobs);

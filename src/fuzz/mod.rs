@@ -346,13 +346,24 @@ impl Runner {
     /// Run one input; `Err` is an input handled badly (a refusal whose message
     /// does not name the file, or an accepted input that fails later).
     pub fn run(&self, input: &Input) -> std::result::Result<Outcome, String> {
+        self.run_with(input, true)
+    }
+
+    /// [`Runner::run`]; with `deep` false, an accepted input is only loaded
+    /// (validated), not built, rendered, traced or run through parity.
+    pub fn run_with(&self, input: &Input, deep: bool) -> std::result::Result<Outcome, String> {
         let path = self.stage(input).map_err(|e| format!("cannot stage the input: {e}"))?;
         let result = match input.kind {
+            Kind::Scene if !deep => Scene::load(&path).map(|_| Outcome::Accepted { ran: false }),
             Kind::Scene => self.scene(&path, &Overrides::default(), None),
+            Kind::Obj | Kind::Mtl if !deep => {
+                crate::mesh::load_mesh(&self.path_of(Kind::Obj), crate::mesh::Content::WithMaterials)
+                    .map(|_| Outcome::Accepted { ran: false })
+            }
             Kind::Obj | Kind::Mtl => self.obj(&self.path_of(Kind::Obj)),
             Kind::Texture => crate::texture::Texture::load(&path, false).map(|_| Outcome::Accepted { ran: false }),
             Kind::Rays => self.rays(&path),
-            Kind::Flags => return self.flags(&input.args()),
+            Kind::Flags => return self.flags(&input.args(), deep),
         };
         match result {
             Ok(o) => Ok(o),
@@ -391,6 +402,8 @@ impl Runner {
     }
 
     fn obj(&self, path: &Path) -> Result<Outcome> {
+        // As `render` loads it (materials and their textures), then as `parity` does.
+        crate::mesh::load_mesh(path, crate::mesh::Content::WithMaterials)?;
         let ctx = crate::rays::load_context(path)?;
         let opts = crate::verify::hits::ParityOptions {
             sets: crate::rays::SetKind::ALL.to_vec(),
@@ -416,7 +429,7 @@ impl Runner {
         Ok(Outcome::Accepted { ran: true })
     }
 
-    fn flags(&self, args: &[String]) -> std::result::Result<Outcome, String> {
+    fn flags(&self, args: &[String], deep: bool) -> std::result::Result<Outcome, String> {
         let sub = args.first().cloned().unwrap_or_default();
         let cmd = clap::Command::new("rtdiff").no_binary_name(true);
         let parsed = match sub.as_str() {
@@ -440,7 +453,7 @@ impl Runner {
                 };
             }
         };
-        if sub != "render" {
+        if sub != "render" || !deep {
             return Ok(Outcome::Accepted { ran: false });
         }
         let a = crate::cli::render::RenderArgs::from_arg_matches(&m).map_err(|e| e.to_string())?;
