@@ -13,16 +13,20 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Render a scene file to a PNG or EXR image.
+    #[command(after_help = rtdiff::limits::HELP)]
     Render(rtdiff::cli::render::RenderArgs),
     /// Visual debugging: one pixel's ray tree, overlays drawn over the render, heatmaps.
     Debug(rtdiff::cli::debug::DebugArgs),
     /// Print BVH statistics (nodes, leaves, levels, leaf sizes, SAH cost, memory, build time) per builder.
     BvhStats(rtdiff::cli::bvh_stats::BvhStatsArgs),
     /// Time BVH builds and traversals (and Embree, when built with it) on primary, incoherent and shadow rays.
+    #[command(after_help = rtdiff::limits::HELP)]
     Bench(rtdiff::cli::bench::BenchArgs),
     /// Hit parity of every native builder x traversal against Embree or brute force.
+    #[command(after_help = rtdiff::limits::HELP)]
     Parity(rtdiff::cli::parity::ParityArgs),
     /// Trace rays from a CSV file and write the hits as CSV.
+    #[command(after_help = rtdiff::limits::HELP)]
     Trace(rtdiff::cli::trace::TraceArgs),
     /// Export a scene for Mitsuba 3 (the image oracle): scene.xml, PLY meshes, textures.
     Export(rtdiff::cli::export::ExportArgs),

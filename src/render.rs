@@ -106,6 +106,10 @@ pub fn with_threads<T: Send>(threads: Option<usize>, work: impl FnOnce() -> T + 
 
 /// Render `scene` with hits from `tracer`.
 pub fn render(scene: &Scene, tracer: &dyn Tracer, opts: &RenderOptions) -> Result<RenderResult> {
+    if let Some(n) = opts.threads {
+        crate::limits::check_flag("--threads", n, 1, crate::limits::MAX_THREADS)?;
+    }
+    crate::scene::validate::check_render_work(scene)?;
     let plan = scene.plan();
     let integ = Whitted::new(scene, tracer, plan);
     let (w, h) = (scene.width, scene.height);

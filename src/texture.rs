@@ -10,6 +10,7 @@ use std::path::Path;
 use glam::Vec3;
 
 use crate::error::{Error, Result};
+use crate::limits;
 
 /// A linear-RGB texture.
 #[derive(Clone, Debug, PartialEq)]
@@ -36,11 +37,41 @@ pub fn linear_to_srgb(c: f32) -> f32 {
 
 impl Texture {
     /// Load an image file. 8-bit images are sRGB-decoded unless `raw` (as Mitsuba's `bitmap`).
+    /// The size in the file's header is checked against [`limits::MAX_TEXTURE_SIDE`] and
+    /// [`limits::MAX_TEXTURE_PIXELS`] before anything is decoded.
     pub fn load(path: &Path, raw: bool) -> Result<Self> {
+        if path.as_os_str().is_empty() {
+            return Err(Error::Invalid("texture file name is empty".into()));
+        }
         if let Err(e) = std::fs::metadata(path) {
             return Err(Error::io(path, &e));
         }
-        let img = image::open(path).map_err(|e| Error::file(path, format!("cannot decode texture: {e}")))?;
+        let decode_err = |e: image::ImageError| Error::file(path, format!("cannot decode texture: {e}"));
+        let reader = || -> Result<image::ImageReader<std::io::BufReader<std::fs::File>>> {
+            image::ImageReader::open(path)
+                .map_err(|e| Error::io(path, &e))?
+                .with_guessed_format()
+                .map_err(|e| Error::io(path, &e))
+        };
+        let (w, h) = reader()?.into_dimensions().map_err(decode_err)?;
+        let side = limits::MAX_TEXTURE_SIDE;
+        if w > side || h > side || w as u64 * h as u64 > limits::MAX_TEXTURE_PIXELS {
+            return Err(Error::file(
+                path,
+                format!(
+                    "texture is {w}x{h} texels, over the limit of {side} a side and {} in all",
+                    limits::MAX_TEXTURE_PIXELS
+                ),
+            ));
+        }
+        let mut lim = image::Limits::default();
+        lim.max_image_width = Some(side);
+        lim.max_image_height = Some(side);
+        // The decoder's own buffers: at most 16-bit RGBA (8 bytes a texel).
+        lim.max_alloc = Some(limits::MAX_TEXTURE_PIXELS * 8 + (64 << 20));
+        let mut r = reader()?;
+        r.limits(lim);
+        let img = r.decode().map_err(decode_err)?;
         let rgb = img.to_rgb32f();
         let (width, height) = rgb.dimensions();
         if width == 0 || height == 0 {

@@ -148,7 +148,7 @@ fn bad_command_line_values() {
     let s = write(&d, "s.json", "{}");
     fails_with(&d, &s, &["--feature", "warp=on"], &["unknown feature 'warp'"]);
     fails_with(&d, &s, &["--feature", "bloom=maybe"], &["on or off"]);
-    fails_with(&d, &s, &["--threads", "0"], &["--threads must be at least 1"]);
+    fails_with(&d, &s, &["--threads", "0"], &["--threads", "0 is not in 1..=1024"]);
     let out = Command::new(env!("CARGO_BIN_EXE_rtdiff"))
         .args(["render", s.to_str().unwrap(), "-o", d.join("x.jpg").to_str().unwrap()])
         .output()

@@ -93,7 +93,11 @@ impl<'a> Plan<'a> {
         for i in 2..=WIDTH {
             for j in 1..i {
                 let c = cl[j] + cr[i - j];
-                if c < dist[i] {
+                // `split[i] == 0`: take the first candidate even when every cost
+                // is infinite or NaN (box areas that overflow f32), so that
+                // `emit` always splits into 1..i lanes; a 0 here made it ask
+                // for lane count 0 and index `cost[n][0 - 1]`.
+                if c < dist[i] || split[i] == 0 {
                     dist[i] = c;
                     split[i] = j as u8;
                 }

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use crate::accel::{AccelConfig, Builder, Traversal, build_tracer};
 use crate::error::{Error, Result};
+use crate::limits;
 use crate::perf::bench::{BenchOptions, BenchReport, LIGHT, RaySets};
 use crate::perf::race::RaceReport;
 
@@ -14,14 +15,14 @@ pub struct BenchArgs {
     /// Scene files, or OBJ meshes (normalised to the unit sphere); default
     /// assets/dragon_87k.obj and assets/dragon_full.obj when present.
     pub scenes: Vec<PathBuf>,
-    /// Timed runs per measurement (the median is reported).
-    #[arg(long, default_value_t = 3)]
+    /// Timed runs per measurement (the median is reported; 1 to 10000).
+    #[arg(long, default_value_t = 3, value_parser = limits::ranged::<usize>(1, limits::MAX_RUNS as u64))]
     pub runs: usize,
-    /// Primary image width and height (rays = size^2).
-    #[arg(long, default_value_t = 512)]
+    /// Primary image width and height (rays = size^2; 1 to 4096, so at most 2^24 rays).
+    #[arg(long, default_value_t = 512, value_parser = limits::ranged::<u32>(1, limits::MAX_BENCH_SIZE as u64))]
     pub size: u32,
-    /// Number of incoherent rays.
-    #[arg(long, default_value_t = 262_144)]
+    /// Number of incoherent rays (0 to 2^24).
+    #[arg(long, default_value_t = 262_144, value_parser = limits::ranged::<usize>(0, limits::MAX_RAYS as u64))]
     pub incoherent: usize,
     /// Builders to time (all when none is given).
     #[arg(long, value_enum)]
@@ -32,16 +33,16 @@ pub struct BenchArgs {
     /// Skip the all-threads measurements.
     #[arg(long)]
     pub single_only: bool,
-    /// Primitives per leaf for the median builder.
-    #[arg(long, default_value_t = 1)]
+    /// Primitives per leaf for the median builder (1 to 2^20).
+    #[arg(long, default_value_t = 1, value_parser = limits::ranged::<usize>(1, limits::MAX_LEAF_SIZE as u64))]
     pub leaf_size: usize,
-    /// Bins per axis for the sah builder.
-    #[arg(long, default_value_t = 16)]
+    /// Bins per axis for the sah builder (2 to 256).
+    #[arg(long, default_value_t = 16, value_parser = limits::ranged::<usize>(limits::MIN_BINS as u64, limits::MAX_BINS as u64))]
     pub bins: usize,
     /// Instead of the tables: race sah/fast against Embree MEDIUM for this
     /// many interleaved rounds on one thread and report the median ratios
     /// (needs `--features embree`).
-    #[arg(long, value_name = "ROUNDS")]
+    #[arg(long, value_name = "ROUNDS", value_parser = limits::ranged::<usize>(1, limits::MAX_RUNS as u64))]
     pub race: Option<usize>,
 }
 

@@ -16,10 +16,10 @@ pub struct BvhStatsArgs {
     #[arg(long, value_enum)]
     pub builder: Vec<Builder>,
     /// Primitives per leaf for the median builder.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = crate::limits::ranged::<usize>(1, crate::limits::MAX_LEAF_SIZE as u64))]
     pub leaf_size: usize,
     /// Bins per axis for the sah builder.
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = 16, value_parser = crate::limits::ranged::<usize>(crate::limits::MIN_BINS as u64, crate::limits::MAX_BINS as u64))]
     pub bins: usize,
     /// Print JSON instead of a table.
     #[arg(long)]

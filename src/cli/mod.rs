@@ -10,3 +10,4 @@ pub mod parity;
 pub mod render;
 pub mod report;
 pub mod trace;
+pub mod warnings;

@@ -35,8 +35,8 @@ pub struct ParityArgs {
     /// (`all` adds the numerical stress report).
     #[arg(long, value_parser = parse_rays, default_value = "all")]
     pub rays: RaySelection,
-    /// Rays per set.
-    #[arg(long, default_value_t = 100_000)]
+    /// Rays per set (1 to 2^24).
+    #[arg(long, default_value_t = 100_000, value_parser = crate::limits::ranged::<usize>(1, crate::limits::MAX_RAYS as u64))]
     pub count: usize,
     /// Seed of the ray sets.
     #[arg(long, default_value_t = 1)]
@@ -52,16 +52,17 @@ pub struct ParityArgs {
     pub default_only: bool,
     /// Rays per set for the builder x traversal variants other than the default
     /// `sah/fast` (which always sees every ray); 0 = all rays.
-    #[arg(long, default_value_t = 10_000)]
+    #[arg(long, default_value_t = 10_000, value_parser = crate::limits::ranged::<usize>(0, crate::limits::MAX_RAYS as u64))]
     pub sweep_count: usize,
-    /// Disagreeing rays to print per set and tracer.
-    #[arg(long, default_value_t = 3)]
+    /// Disagreeing rays to print per set and tracer (0 to 10000).
+    #[arg(long, default_value_t = 3, value_parser = crate::limits::ranged::<usize>(0, crate::limits::MAX_EXAMPLES as u64))]
     pub examples: usize,
 }
 
 /// Run `rtdiff parity`.
 pub fn run(args: &ParityArgs) -> Result<()> {
-    let ctx = crate::rays::load_context(&args.scene)?;
+    let (ctx, skipped) = crate::rays::load_context_counted(&args.scene)?;
+    super::warnings::degenerate(&args.scene, &ctx.prims, skipped);
     let sets = match args.rays.0 {
         None => SetKind::ALL.to_vec(),
         Some(set) => vec![set],

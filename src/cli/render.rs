@@ -6,6 +6,7 @@ use std::time::Instant;
 use crate::accel::{self, Backend, Builder, Traversal};
 use crate::error::{Error, Result};
 use crate::geometry::TriangleTest;
+use crate::limits;
 use crate::post::bloom;
 use crate::render::{RenderOptions, render};
 use crate::scene::{Overrides, Scene};
@@ -18,20 +19,20 @@ pub struct RenderArgs {
     /// Output image: .png (8-bit sRGB) or .exr (linear float).
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Image width.
-    #[arg(long)]
+    /// Image width (1 to 16384, at most 2^25 pixels in all).
+    #[arg(long, value_parser = limits::ranged::<u32>(1, limits::MAX_IMAGE_SIDE as u64))]
     pub width: Option<u32>,
-    /// Image height.
-    #[arg(long)]
+    /// Image height (1 to 16384, at most 2^25 pixels in all).
+    #[arg(long, value_parser = limits::ranged::<u32>(1, limits::MAX_IMAGE_SIDE as u64))]
     pub height: Option<u32>,
-    /// Camera samples per pixel.
-    #[arg(long)]
+    /// Camera samples per pixel (1 to 65536).
+    #[arg(long, value_parser = limits::ranged::<u32>(1, limits::MAX_SPP as u64))]
     pub spp: Option<u32>,
     /// Random seed.
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Worker threads (the image is identical for any count).
-    #[arg(long)]
+    /// Worker threads, 1 to 1024 (the image is identical for any count).
+    #[arg(long, value_parser = limits::ranged::<usize>(1, limits::MAX_THREADS as u64))]
     pub threads: Option<usize>,
     /// Turn a feature on or off, e.g. `--feature bloom=on` (repeatable).
     #[arg(long = "feature", value_name = "NAME=on|off")]
@@ -81,19 +82,27 @@ fn stage_path(out: &std::path::Path, stage: &str) -> PathBuf {
     out.with_file_name(format!("{stem}.bloom-{stage}.{ext}"))
 }
 
+impl RenderArgs {
+    /// The scene overrides these arguments ask for.
+    pub fn overrides(&self) -> Result<Overrides> {
+        let args = self;
+        Ok(Overrides {
+            width: args.width,
+            height: args.height,
+            spp: args.spp,
+            seed: args.seed,
+            features: args.features.iter().map(|f| parse_feature(f)).collect::<Result<_>>()?,
+            backend: args.tracer,
+            builder: args.builder,
+            traversal: args.traversal,
+            triangle_test: args.triangle_test,
+        })
+    }
+}
+
 /// Run `rtdiff render`.
 pub fn run(args: &RenderArgs) -> Result<()> {
-    let ov = Overrides {
-        width: args.width,
-        height: args.height,
-        spp: args.spp,
-        seed: args.seed,
-        features: args.features.iter().map(|f| parse_feature(f)).collect::<Result<_>>()?,
-        backend: args.tracer,
-        builder: args.builder,
-        traversal: args.traversal,
-        triangle_test: args.triangle_test,
-    };
+    let ov = args.overrides()?;
     let ext = args.output.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     if !matches!(ext.as_deref(), Some("png" | "exr")) {
         return Err(Error::file(&args.output, "unknown output format: use a .png or .exr file name"));

@@ -42,6 +42,9 @@ pub fn parse_rays(path: &Path, text: &str) -> Result<Vec<Ray>> {
             continue;
         }
         let at = |msg: String| Error::file(path, format!("line {}: {msg}", i + 1));
+        if rays.len() >= crate::limits::MAX_RAYS {
+            return Err(at(format!("more than {} rays, the limit of one file", crate::limits::MAX_RAYS)));
+        }
         let fields: Vec<&str> = line.split(',').map(str::trim).collect();
         if fields.len() != 8 {
             return Err(at(format!(
@@ -54,8 +57,12 @@ pub fn parse_rays(path: &Path, text: &str) -> Result<Vec<Ray>> {
             v[k] = f.parse::<f32>().map_err(|_| at(format!("value {} ({f:?}) is not a number", k + 1)))?;
         }
         let (o, d) = (Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5]));
+        let m = crate::limits::MAX_COORDINATE;
         if !o.is_finite() || !d.is_finite() {
             return Err(at("origin and direction must be finite".into()));
+        }
+        if o.abs().max_element() > m || d.abs().max_element() > m {
+            return Err(at(format!("origin and direction components must be at most {m:e} in absolute value")));
         }
         if d == Vec3::ZERO {
             return Err(at("direction is zero".into()));
@@ -70,7 +77,15 @@ pub fn parse_rays(path: &Path, text: &str) -> Result<Vec<Ray>> {
 
 /// Run `rtdiff trace`.
 pub fn run(args: &TraceArgs) -> Result<()> {
-    let ctx = crate::rays::load_context(&args.scene)?;
+    let (ctx, skipped) = crate::rays::load_context_counted(&args.scene)?;
+    super::warnings::degenerate(&args.scene, &ctx.prims, skipped);
+    let size = std::fs::metadata(&args.rays).map_err(|e| Error::io(&args.rays, &e))?.len();
+    if size > crate::limits::MAX_RAY_FILE_BYTES {
+        return Err(Error::file(
+            &args.rays,
+            format!("ray file is {size} bytes, over the limit of {} bytes", crate::limits::MAX_RAY_FILE_BYTES),
+        ));
+    }
     let text = std::fs::read_to_string(&args.rays).map_err(|e| Error::io(&args.rays, &e))?;
     let rays = parse_rays(&args.rays, &text)?;
     let cfg = AccelConfig { backend: args.tracer, ..Default::default() };

@@ -19,7 +19,7 @@ pub fn gamma(n: i32) -> f32 {
 
 /// How secondary rays leave a surface.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case", tag = "kind")]
+#[serde(rename_all = "kebab-case", tag = "kind", deny_unknown_fields)]
 pub enum SpawnOffset {
     /// Error-bound offset along the geometric normal (pbrt-v4).
     #[default]

@@ -27,12 +27,17 @@ use crate::geometry::Primitives;
 /// `"normalize": true` uses: `bench`, `parity`, `trace` and `render` trace the
 /// same vertices to the bit.
 pub fn load_normalized_mesh(path: &Path) -> Result<Arc<Primitives>> {
+    load_normalized_mesh_counted(path).map(|(prims, _)| prims)
+}
+
+/// [`load_normalized_mesh`], also returning the number of zero-area triangles dropped while loading.
+pub fn load_normalized_mesh_counted(path: &Path) -> Result<(Arc<Primitives>, usize)> {
     let mut mesh = crate::mesh::load_mesh(path, crate::mesh::Content::Geometry)?;
     crate::geometry::normalize_to_unit_sphere(&mut mesh.positions);
     if mesh.indices.is_empty() {
         return Err(Error::file(path, "the mesh has no (non-degenerate) triangles"));
     }
-    Ok(Arc::new(mesh.to_primitives()))
+    Ok((Arc::new(mesh.to_primitives()), mesh.degenerate_skipped))
 }
 
 /// The scene a harness command runs on: a scene file (`.json`, through
@@ -40,14 +45,23 @@ pub fn load_normalized_mesh(path: &Path) -> Result<Arc<Primitives>> {
 /// lights), or a mesh (`.obj`, `.ply`, optionally `.gz`) normalised by [`load_normalized_mesh`] with the
 /// default camera and point light.
 pub fn load_context(path: &Path) -> Result<RayContext> {
+    load_context_counted(path).map(|(ctx, _)| ctx)
+}
+
+/// [`load_context`], also returning the number of zero-area triangles dropped while loading.
+pub fn load_context_counted(path: &Path) -> Result<(RayContext, usize)> {
     let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
     match ext.as_deref() {
-        _ if crate::mesh::is_mesh_file(path) => Ok(RayContext::with_defaults(load_normalized_mesh(path)?)),
+        _ if crate::mesh::is_mesh_file(path) => {
+            let (prims, skipped) = load_normalized_mesh_counted(path)?;
+            Ok((RayContext::with_defaults(prims), skipped))
+        }
         Some("json") => {
             let scene = crate::scene::Scene::load(path)?;
+            let skipped = scene.degenerate_skipped;
             let camera = scene.camera.clone();
             let lights = Arc::new(scene.lights);
-            Ok(RayContext {
+            let ctx = RayContext {
                 prims: scene.prims,
                 camera: Arc::new(move |x, y| camera.ray(x, y)),
                 image: (scene.width, scene.height),
@@ -57,7 +71,8 @@ pub fn load_context(path: &Path) -> Result<RayContext> {
                         Arc::new(move |u, v| lights[i].position_at(u, v)) as LightFn
                     })
                     .collect(),
-            })
+            };
+            Ok((ctx, skipped))
         }
         _ => Err(Error::file(
             path,

@@ -3,6 +3,7 @@
 
 pub mod export;
 pub mod file;
+pub mod validate;
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -108,11 +109,6 @@ impl std::fmt::Debug for Scene {
     }
 }
 
-fn read_scene_file(path: &Path) -> Result<SceneFile> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, &e))?;
-    serde_json::from_str(&text).map_err(|e| Error::file(path, format!("invalid scene: {e}")))
-}
-
 impl Scene {
     /// Load a scene file.
     pub fn load(path: &Path) -> Result<Self> {
@@ -121,12 +117,12 @@ impl Scene {
 
     /// Load a scene file and apply command-line overrides.
     pub fn load_with(path: &Path, ov: &Overrides) -> Result<Self> {
-        Self::from_file_with(read_scene_file(path)?, path, ov)
+        Self::from_file_with(validate::read_scene_file(path)?, path, ov)
     }
 
     /// Read a scene file without building the scene (errors name `path`).
     pub fn read_file(path: &Path) -> Result<SceneFile> {
-        read_scene_file(path)
+        validate::read_scene_file(path)
     }
 
     /// Build a scene from a parsed file that lives at `path` (relative paths
@@ -164,6 +160,7 @@ impl Scene {
     /// Build a scene from a parsed file; relative paths resolve against `dir`,
     /// and errors name `path`.
     pub fn from_file(file: &SceneFile, dir: &Path, path: &Path) -> Result<Self> {
+        validate::check_file(file, path)?;
         let bad = |msg: String| Error::file(path, msg);
         let img = &file.image;
         if img.width == 0 || img.height == 0 {
@@ -224,7 +221,10 @@ impl Scene {
                 return Err(bad(format!("material '{name}': transparency must be in [0, 1]")));
             }
             let kd_texture = match &m.kd_texture {
-                Some(t) => Some(load_texture(&dir.join(t), m.texture_raw)?),
+                Some(t) => Some(
+                    load_texture(&dir.join(t), m.texture_raw)
+                        .map_err(|e| bad(format!("materials.{name}.kd_texture: {e}")))?,
+                ),
                 None => None,
             };
             let mat = Material {
@@ -252,10 +252,12 @@ impl Scene {
         let mut warnings = Vec::new();
         for (mi, spec) in file.meshes.iter().enumerate() {
             let obj_path = dir.join(&spec.file);
-            let mut mesh = crate::mesh::load_mesh(&obj_path, crate::mesh::Content::WithMaterials)?;
+            let mut mesh = crate::mesh::load_mesh(&obj_path, crate::mesh::Content::WithMaterials)
+                .map_err(|e| bad(format!("meshes[{mi}].file: {e}")))?;
             degenerate_skipped += mesh.degenerate_skipped;
             warnings.append(&mut mesh.warnings);
             place_mesh(&mut mesh, spec);
+            validate::check_mesh_bounds(path, &format!("meshes[{mi}]"), &spec.file, &mesh.positions)?;
             let forced = match &spec.material {
                 Some(name) => Some(lookup(name, &format!("mesh {} ({})", mi + 1, spec.file))?),
                 None => None,
@@ -265,7 +267,8 @@ impl Scene {
                 let id = match spec.material_overrides.get(&m.name) {
                     Some(name) => lookup(name, &format!("mesh {} material override", mi + 1))?,
                     None => {
-                        let mat = convert_mtl(m, file.shading_model, &mut load_texture)?;
+                        let mat = convert_mtl(m, file.shading_model, &mut load_texture)
+                            .map_err(|e| bad(format!("meshes[{mi}] ({}): {e}", spec.file)))?;
                         materials.push(mat);
                         materials.len() as u32 - 1
                     }

@@ -1,0 +1,398 @@
+//! Issue 13: every cause of a panic, abort, hang, runaway allocation, useless
+//! message or silently accepted input has a test here. For each limit of
+//! `rtdiff::limits`, an input at the limit works and one past it gets an
+//! error naming the file, the field and the limit.
+
+mod common;
+
+use std::path::Path;
+use std::process::Command;
+use std::sync::Arc;
+
+use common::{temp_dir, write};
+use glam::Vec3;
+use rtdiff::accel::{AccelConfig, BruteForce, Tracer, build_tracer};
+use rtdiff::geometry::{Primitives, Ray, Triangle};
+use rtdiff::limits;
+use rtdiff::render::{RenderOptions, render};
+use rtdiff::scene::Scene;
+
+const TRI: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+
+/// A scene with one triangle, a 2x2 image and `extra` JSON fields merged in at the top level.
+fn scene_text(extra: &str) -> String {
+    let comma = if extra.trim().is_empty() { "" } else { "," };
+    format!(
+        r#"{{ "image": {{ "width": 2, "height": 2 }}, "meshes": [ {{ "file": "t.obj" }} ],
+             "camera": {{ "position": [0.2, 0.2, -2], "look_at": [0.2, 0.2, 0] }},
+             "lights": [ {{ "type": "point", "position": [0, 0, -1], "color": [1, 1, 1] }} ]{comma} {extra} }}"#
+    )
+}
+
+fn load(dir: &Path, json: &str) -> rtdiff::Result<Scene> {
+    write(dir, "t.obj", TRI);
+    let s = write(dir, "s.json", json);
+    Scene::load(&s)
+}
+
+#[track_caller]
+fn refused(dir: &Path, json: &str, needles: &[&str]) {
+    let err = load(dir, json).expect_err("the scene must be refused").to_string();
+    assert!(err.contains("s.json"), "error does not name the file: {err}");
+    for n in needles {
+        assert!(err.contains(n), "error lacks {n:?}: {err}");
+    }
+}
+
+/// Render `scene` quietly on one thread.
+fn render_ok(scene: &Scene) -> rtdiff::render::RenderResult {
+    let tracer = build_tracer(scene.prims.clone(), &scene.accel).expect("tracer");
+    render(scene, tracer.as_ref(), &RenderOptions { threads: Some(1), quiet: true }).expect("render")
+}
+
+#[test]
+fn non_finite_numbers_are_refused_with_their_json_path() {
+    let d = temp_dir("hostile-nonfinite");
+    let cases = [
+        (r#""camera": { "position": [1e39, 0, -2] }"#, "camera.position[0]"),
+        (r#""camera": { "focus_distance": 1e39 }"#, "camera.focus_distance"),
+        (r#""image": { "background": [0, 1e39, 0] }"#, "image.background[1]"),
+        (r#""params": { "bloom": { "scale": 1e39 } }"#, "params.bloom.scale"),
+        (r#""spheres": [ { "center": [0, 0, 0], "radius": 1e39 } ]"#, "spheres[0].radius"),
+    ];
+    for (extra, path) in cases {
+        let json = format!(r#"{{ {extra} }}"#);
+        refused(&d, &json, &[path, "finite"]);
+    }
+    let lights = r#""lights": [ {"type": "point", "position": [0, 1, 0], "color": [1, 1, 1]},
+        {"type": "point", "position": [0, 1, 0], "color": [1, 1, 1]},
+        {"type": "point", "position": [0, 1, 0], "color": [1, 1e39, 1]} ]"#;
+    refused(&d, &format!("{{ {lights} }}"), &["lights[2].color[1]", "must be a finite number, got inf"]);
+    let mesh = |t: &str| format!(r#"{{ "meshes": [ {{ "file": "t.obj", "transform": {{ {t} }} }} ] }}"#);
+    refused(&d, &mesh(r#""translate": [1e39, 0, 0]"#), &["meshes[0].transform.translate[0]"]);
+    refused(&d, &mesh(r#""scale": [1, 1e39, 1]"#), &["meshes[0].transform.scale[1]"]);
+    refused(&d, &mesh(r#""rotate": [0, 0, 1e39]"#), &["meshes[0].transform.rotate[2]"]);
+}
+
+#[test]
+fn coordinates_at_the_limit_work_and_past_it_are_refused() {
+    let d = temp_dir("hostile-coord");
+    // A triangle placed 1e12 away (the limit) loads and builds.
+    let at = r#""meshes": [ { "file": "t.obj", "transform": { "translate": [1e12, 0, 0] } } ]"#;
+    let s = load(&d, &format!("{{ {at} }}")).expect("at the limit");
+    assert_eq!(s.prims.triangles.len(), 1);
+    // Scaled past it, the vertex is refused after the transform.
+    let past =
+        r#""meshes": [ { "file": "t.obj", "transform": { "scale": [1e12, 1e12, 1e12], "translate": [1e12, 0, 0] } } ]"#;
+    refused(&d, &format!("{{ {past} }}"), &["meshes[0] (t.obj)", "vertex 2", "coordinate limit 1e12"]);
+    refused(&d, r#"{ "camera": { "position": [0, 0, -1.1e12] } }"#, &["camera.position[2]", "1e12"]);
+}
+
+/// The real cause of `index -1` in `bvh/collapse.rs`: box areas that overflow
+/// f32 made every SAH cost infinite, so no split was chosen and the collapse
+/// asked for zero lanes. Validation keeps scenes far from it; the BVH itself
+/// now survives it and still agrees with brute force.
+#[test]
+fn bvh_survives_overflowing_box_areas_and_agrees_with_brute_force() {
+    let big = 1.0e37f32;
+    let mut prims = Primitives::default();
+    for i in 0..40 {
+        let o = Vec3::new(i as f32 * 1e35, (i % 7) as f32 * 1e35, 0.0);
+        prims.triangles.push(Triangle { v: [o, o + Vec3::new(big, 0.0, 0.0), o + Vec3::new(0.0, big, 1e30)] });
+    }
+    let prims = Arc::new(prims);
+    let brute = BruteForce::new(prims.clone(), Default::default());
+    for cfg in rtdiff::verify::hits::native_variants() {
+        let t = build_tracer(prims.clone(), &AccelConfig { backend: rtdiff::accel::Backend::Native, ..cfg })
+            .expect("builds");
+        for k in 0..50 {
+            let r = Ray::new(Vec3::new(k as f32 * 1e35, k as f32 * 3e34, -1e30), Vec3::Z);
+            assert_eq!(t.intersect(&r).map(|h| h.prim), brute.intersect(&r).map(|h| h.prim), "{}", t.name());
+        }
+    }
+}
+
+#[test]
+fn image_size_and_samples_limits() {
+    let d = temp_dir("hostile-image");
+    // At the side limit: a 16384 x 1 image renders.
+    let s = load(&d, &scene_text("").replace(r#""width": 2, "height": 2"#, r#""width": 16384, "height": 1"#))
+        .expect("16384 wide");
+    assert_eq!(render_ok(&s).image.pixels.len(), 16_384);
+    let past = scene_text("").replace(r#""width": 2"#, r#""width": 16385"#);
+    refused(&d, &past, &["image.width", "16385 exceeds the limit 16384"]);
+    // Pixel count: 8192 x 4096 = 2^25 is accepted by validation, 8192 x 4097 is not.
+    let f =
+        rtdiff::scene::validate::parse_scene(Path::new("s.json"), r#"{ "image": { "width": 8192, "height": 4096 } }"#)
+            .expect("parses");
+    rtdiff::scene::validate::check_file(&f, Path::new("s.json")).expect("2^25 pixels");
+    refused(&d, r#"{ "image": { "width": 8192, "height": 4097 } }"#, &["image", "over the limit of 33554432 pixels"]);
+    refused(&d, r#"{ "image": { "width": 0, "height": 8 } }"#, &["0x8", "empty"]);
+    // spp at the limit renders one pixel; past it, refused.
+    let one = |extra: &str| scene_text(extra).replace(r#""width": 2, "height": 2"#, r#""width": 1, "height": 1"#);
+    let s = load(&d, &one("").replace(r#""height": 1"#, r#""height": 1, "spp": 65536"#)).expect("spp 65536");
+    assert!(render_ok(&s).image.pixels[0].is_finite());
+    refused(
+        &d,
+        &one("").replace(r#""height": 1"#, r#""height": 1, "spp": 65537"#),
+        &["image.spp", "65537 exceeds the limit 65536"],
+    );
+    // Feature samples at the limit (an area light sampled 4096 times).
+    let area = r#""lights": [ {"type": "parallelogram", "v0": [0, 0, -1], "edge01": [0.5, 0, 0], "edge02": [0, 0.5, 0],
+        "colors": [[1,1,1],[1,1,1],[1,1,1],[1,1,1]]} ]"#;
+    let json =
+        one("").replace(r#""lights": [ { "type": "point", "position": [0, 0, -1], "color": [1, 1, 1] } ]"#, area);
+    for (field, at) in [("light_samples", 4096), ("glossy_samples", 4096), ("dof_samples", 4096)] {
+        let ok = json.replacen('{', &format!(r#"{{ "params": {{ "{field}": {at} }},"#), 1);
+        let s = load(&d, &ok).unwrap_or_else(|e| panic!("{field} {at}: {e}"));
+        assert!(render_ok(&s).image.pixels[0].is_finite());
+        let past = json.replacen('{', &format!(r#"{{ "params": {{ "{field}": {} }},"#, at + 1), 1);
+        refused(&d, &past, &[&format!("params.{field}"), "4097 exceeds the limit 4096"]);
+    }
+}
+
+/// A closed box of mirrors seen from inside: every ray bounces until the depth limit.
+fn mirror_box(dir: &Path, depth: u64) -> rtdiff::Result<Scene> {
+    write(dir, "box.obj", &common::quad_obj(common::square_facing_minus_z(1.0, 1.0)));
+    let faces =
+        [[0.0, 0.0, 0.0], [0.0, 180.0, 0.0], [0.0, 90.0, 0.0], [0.0, -90.0, 0.0], [90.0, 0.0, 0.0], [-90.0, 0.0, 0.0]];
+    let meshes: Vec<String> = faces
+        .iter()
+        .map(|r| {
+            format!(
+                r#"{{ "file": "box.obj", "material": "mirror", "transform": {{ "rotate": [{}, {}, {}] }} }}"#,
+                r[0], r[1], r[2]
+            )
+        })
+        .collect();
+    let json = format!(
+        r#"{{ "image": {{ "width": 2, "height": 2 }}, "params": {{ "max_depth": {depth} }},
+             "camera": {{ "position": [0, 0, 0], "look_at": [0.3, 0.2, 1] }},
+             "materials": {{ "mirror": {{ "kd": [0.1, 0.1, 0.1], "ks": [0.9, 0.9, 0.9] }} }},
+             "meshes": [ {} ],
+             "lights": [ {{ "type": "point", "position": [0.1, 0.2, 0.3], "color": [1, 1, 1] }} ] }}"#,
+        meshes.join(", ")
+    );
+    let s = write(dir, "s.json", &json);
+    Scene::load(&s)
+}
+
+#[test]
+fn closed_mirror_box_at_max_depth_renders_and_past_it_is_refused() {
+    let d = temp_dir("hostile-mirror");
+    let s = mirror_box(&d, limits::MAX_DEPTH as u64).expect("depth 64");
+    let r = render_ok(&s);
+    // Every camera ray bounced to the limit: 4 pixels x 65 rays.
+    assert_eq!(r.counters.primary_rays + r.counters.secondary_rays, 4 * (limits::MAX_DEPTH as u64 + 1));
+    for depth in [65u64, 1_000_000_000] {
+        let e = mirror_box(&d, depth).expect_err("refused").to_string();
+        assert!(e.contains("s.json") && e.contains("params.max_depth") && e.contains("exceeds the limit 64"), "{e}");
+    }
+}
+
+#[test]
+fn worst_case_ray_count_is_bounded() {
+    let d = temp_dir("hostile-work");
+    // A glass-and-mirror material doubles the ray tree per level: depth 64 would never finish.
+    let json = scene_text(
+        r#""params": { "max_depth": 64 }, "features": { "transparency": true },
+           "materials": { "glass": { "ks": [0.5, 0.5, 0.5], "transparency": 0.5 } }"#,
+    )
+    .replace(r#""file": "t.obj""#, r#""file": "t.obj", "material": "glass""#);
+    let s = load(&d, &json).expect("loads");
+    let tracer = build_tracer(s.prims.clone(), &s.accel).expect("tracer");
+    let e = render(&s, tracer.as_ref(), &RenderOptions { threads: Some(1), quiet: true }).expect_err("too much work");
+    assert!(e.to_string().contains("over the limit of 1.100e12"), "{e}");
+    // Depth 8 of the same scene renders.
+    let s = load(&d, &json.replace(r#""max_depth": 64"#, r#""max_depth": 8"#)).expect("loads");
+    assert!(rtdiff::scene::validate::worst_case_rays(&s) <= limits::MAX_RENDER_RAYS);
+    render_ok(&s);
+}
+
+#[test]
+fn bloom_kernel_limit() {
+    let d = temp_dir("hostile-bloom");
+    let json = |k: f32| {
+        scene_text(&format!(
+            r#""features": {{ "bloom": true }}, "params": {{ "bloom": {{ "kernel_size": {k}, "threshold": 0 }} }}"#
+        ))
+    };
+    let s = load(&d, &json(limits::MAX_BLOOM_KERNEL)).expect("kernel 1024");
+    let img = render_ok(&s).image;
+    let out = rtdiff::post::bloom::bloom(&img, &s.params.bloom);
+    assert!(out.pixels.iter().all(|p| p.is_finite()));
+    refused(&d, &json(1025.0), &["params.bloom.kernel_size", "1025"]);
+    refused(&d, &json(1e30), &["params.bloom.kernel_size"]);
+}
+
+#[test]
+fn threads_limit() {
+    let d = temp_dir("hostile-threads");
+    let s = load(&d, &scene_text("")).expect("scene");
+    let tracer = build_tracer(s.prims.clone(), &s.accel).expect("tracer");
+    let at = render(&s, tracer.as_ref(), &RenderOptions { threads: Some(limits::MAX_THREADS), quiet: true });
+    assert!(at.is_ok(), "{:?}", at.err());
+    let past = render(&s, tracer.as_ref(), &RenderOptions { threads: Some(limits::MAX_THREADS + 1), quiet: true });
+    assert!(past.expect_err("refused").to_string().contains("--threads 1025 exceeds the limit 1024"));
+}
+
+#[test]
+fn arrays_in_place_of_objects_and_unknown_fields_are_refused() {
+    let d = temp_dir("hostile-shape");
+    refused(
+        &d,
+        r#"{ "camera": [[0, 0, 3], [0, 0, 0], [0, 1, 0], 50, 0, null] }"#,
+        &["camera: expected an object", "array"],
+    );
+    refused(&d, r#"{ "image": [8, 8, 1, 0, [0, 0, 0]] }"#, &["image: expected an object"]);
+    refused(&d, r#"{ "lights": [ ["point", [0, 1, 0], [1, 1, 1]] ] }"#, &["lights[0]: expected an object"]);
+    refused(
+        &d,
+        r#"{ "meshes": [ { "file": "t.obj", "transform": [[1,1,1],[0,0,0],[0,0,0]] } ] }"#,
+        &["meshes[0].transform: expected an object"],
+    );
+    refused(
+        &d,
+        r#"{ "params": { "ray_offset": { "kind": "fixed", "epsilon": 1e-4, "scale": 2 } } }"#,
+        &["unknown field `scale`"],
+    );
+    refused(
+        &d,
+        r#"{ "params": { "ray_offset": { "kind": "robust", "epsilon": 1e-4 } } }"#,
+        &["params.ray_offset", "unknown field `epsilon`"],
+    );
+    refused(&d, r#"{ "materials": { "m": { "kd": [1, 1, 1], "kss": 1 } } }"#, &["materials.m", "unknown field `kss`"]);
+}
+
+#[test]
+fn empty_and_missing_paths_name_the_scene_and_the_field() {
+    let d = temp_dir("hostile-paths");
+    refused(&d, r#"{ "meshes": [ { "file": "" } ] }"#, &["meshes[0].file", "is empty"]);
+    refused(&d, r#"{ "materials": { "m": { "kd_texture": "" } } }"#, &["materials.m.kd_texture", "is empty"]);
+    refused(
+        &d,
+        r#"{ "materials": { "m": { "kd_texture": "gone.png" } } }"#,
+        &["materials.m.kd_texture", "gone.png", "not found"],
+    );
+    refused(&d, r#"{ "meshes": [ { "file": "t.obj" }, { "file": "gone.obj" } ] }"#, &["meshes[1].file", "gone.obj"]);
+}
+
+#[test]
+fn scene_file_size_and_item_count_limits() {
+    let d = temp_dir("hostile-size");
+    let at = format!("{{}}{}", " ".repeat(limits::MAX_SCENE_FILE_BYTES as usize - 2));
+    let s = write(&d, "big.json", &at);
+    Scene::load(&s).expect("16 MiB scene");
+    let s = write(&d, "big.json", &format!("{at} "));
+    let e = Scene::load(&s).expect_err("too big").to_string();
+    assert!(e.contains("big.json") && e.contains("over the limit of 16777216 bytes"), "{e}");
+    let spheres = |n: usize| {
+        let one = r#"{ "center": [0, 0, 0], "radius": 1 }"#;
+        format!(r#"{{ "spheres": [ {} ] }}"#, vec![one; n].join(","))
+    };
+    load(&d, &spheres(limits::MAX_SCENE_ITEMS)).expect("65536 spheres");
+    refused(&d, &spheres(limits::MAX_SCENE_ITEMS + 1), &["spheres (count)", "65537 exceeds the limit 65536"]);
+}
+
+#[test]
+fn texture_size_is_checked_before_decoding() {
+    let d = temp_dir("hostile-texture");
+    let at = d.join("at.png");
+    image::RgbImage::new(limits::MAX_TEXTURE_SIDE, 1).save(&at).expect("png");
+    let t = rtdiff::texture::Texture::load(&at, false).expect("16384 x 1");
+    assert_eq!(t.width, 16_384);
+    let past = d.join("past.png");
+    image::RgbImage::new(limits::MAX_TEXTURE_SIDE + 1, 1).save(&past).expect("png");
+    let e = rtdiff::texture::Texture::load(&past, false).expect_err("refused").to_string();
+    assert!(e.contains("past.png") && e.contains("16385x1") && e.contains("limit of 16384"), "{e}");
+    // A header claiming 65535 x 65535 is refused without allocating 50 GB.
+    let mut bytes = std::fs::read(&at).expect("read");
+    bytes[16..20].copy_from_slice(&65_535u32.to_be_bytes());
+    bytes[20..24].copy_from_slice(&65_535u32.to_be_bytes());
+    let crc = crc32(&bytes[12..29]);
+    bytes[29..33].copy_from_slice(&crc.to_be_bytes());
+    let huge = d.join("huge.png");
+    std::fs::write(&huge, &bytes).expect("write");
+    let e = rtdiff::texture::Texture::load(&huge, false).expect_err("refused").to_string();
+    assert!(e.contains("huge.png") && e.contains("65535x65535"), "{e}");
+}
+
+fn crc32(data: &[u8]) -> u32 {
+    let mut c = 0xffff_ffffu32;
+    for &b in data {
+        c ^= b as u32;
+        for _ in 0..8 {
+            c = if c & 1 != 0 { 0xedb8_8320 ^ (c >> 1) } else { c >> 1 };
+        }
+    }
+    !c
+}
+
+#[test]
+fn ray_csv_limits() {
+    let p = Path::new("rays.csv");
+    let ok = rtdiff::cli::trace::parse_rays(p, "1e12,0,0,0,0,1,0,inf\n").expect("at the limit");
+    assert_eq!(ok.len(), 1);
+    let e =
+        rtdiff::cli::trace::parse_rays(p, "0,0,0,0,0,1,0,1\n1.1e12,0,0,0,0,1,0,inf\n").expect_err("past").to_string();
+    assert!(e.contains("rays.csv") && e.contains("line 2") && e.contains("1e12"), "{e}");
+    let e = rtdiff::cli::trace::parse_rays(p, "0,0,0,0,0,1e39,0,1\n").expect_err("inf").to_string();
+    assert!(e.contains("line 1") && e.contains("finite"), "{e}");
+}
+
+fn rtdiff_cmd(args: &[&str]) -> (i32, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_rtdiff")).args(args).output().expect("runs");
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(!err.contains("panicked"), "{err}");
+    (out.status.code().unwrap_or(-1), err)
+}
+
+#[test]
+fn count_flags_have_limits_named_in_errors_and_help() {
+    let d = temp_dir("hostile-flags");
+    let s = write(&d, "t.obj", TRI);
+    let s = s.to_str().unwrap();
+    for (args, needle) in [
+        (vec!["parity", s, "--count", "16777217"], "16777217 is not in 1..=16777216"),
+        (vec!["parity", s, "--sweep-count", "16777217"], "is not in 0..=16777216"),
+        (vec!["parity", s, "--examples", "10001"], "is not in 0..=10000"),
+        (vec!["bench", s, "--size", "4097"], "4097 is not in 1..=4096"),
+        (vec!["bench", s, "--incoherent", "16777217"], "is not in 0..=16777216"),
+        (vec!["bench", s, "--runs", "0"], "0 is not in 1..=10000"),
+        (vec!["bench", s, "--race", "10001"], "is not in 1..=10000"),
+        (vec!["render", s, "-o", "x.png", "--spp", "65537"], "65537 is not in 1..=65536"),
+        (vec!["render", s, "-o", "x.png", "--width", "16385"], "16385 is not in 1..=16384"),
+        (vec!["render", s, "-o", "x.png", "--threads", "100000"], "100000 is not in 1..=1024"),
+        (vec!["render", s, "-o", "x.png", "--spp", "99999999999999999999"], "--spp"),
+    ] {
+        let (code, err) = rtdiff_cmd(&args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(err.contains(needle), "{args:?}: {err}");
+    }
+    let (code, err) = rtdiff_cmd(&["render", "--help"]);
+    let _ = err;
+    assert_eq!(code, 0);
+    let help = Command::new(env!("CARGO_BIN_EXE_rtdiff")).args(["render", "--help"]).output().expect("help");
+    let help = String::from_utf8_lossy(&help.stdout);
+    assert!(help.contains("Limits") && help.contains("max_depth 64") && help.contains("spp 65536"), "{help}");
+}
+
+#[test]
+fn all_degenerate_mesh_warns_in_trace_and_parity() {
+    let d = temp_dir("hostile-degenerate");
+    let obj = write(&d, "flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\nf 1 3 2\n");
+    let rays = write(&d, "r.csv", "0,0,-1,0,0,1,0,inf\n");
+    let out = d.join("h.csv");
+    let (code, err) =
+        rtdiff_cmd(&["trace", obj.to_str().unwrap(), "--rays", rays.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(err.contains("warning") && err.contains("flat.obj") && err.contains("zero area"), "trace {code}: {err}");
+    let (_, err) =
+        rtdiff_cmd(&["parity", obj.to_str().unwrap(), "--reference", "brute", "--count", "10", "--default-only"]);
+    assert!(err.contains("warning") && err.contains("flat.obj") && err.contains("zero area"), "parity: {err}");
+    // Same through a scene file.
+    write(&d, "flat2.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
+    let s = write(&d, "s.json", r#"{ "meshes": [ { "file": "flat2.obj" } ] }"#);
+    let (_, err) =
+        rtdiff_cmd(&["trace", s.to_str().unwrap(), "--rays", rays.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(err.contains("warning") && err.contains("zero area"), "trace scene: {err}");
+}
