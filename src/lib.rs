@@ -6,10 +6,10 @@
 //! differential harness beside it.
 
 pub mod accel;
+pub mod backends;
 pub mod bvh;
 pub mod camera;
 pub mod cli;
-#[cfg(feature = "embree")]
 pub mod embree;
 pub mod error;
 pub mod features;
@@ -20,6 +20,7 @@ pub mod light;
 pub mod material;
 pub mod mesh;
 pub mod perf;
+pub mod pipeline;
 pub mod post;
 pub mod rays;
 pub mod render;

@@ -10,7 +10,7 @@ use crate::accel::Tracer;
 use crate::error::{Error, Result};
 use crate::features::Plan;
 use crate::film::Image;
-use crate::integrator::{Counters, Integrator, Whitted};
+use crate::integrator::{self, Counters, Integrator};
 use crate::rng::Pcg32;
 use crate::scene::Scene;
 
@@ -78,7 +78,7 @@ fn render_pixel(scene: &Scene, integ: &dyn Integrator, plan: &Plan, x: u32, y: u
 /// Render `scene` with hits from `tracer`.
 pub fn render(scene: &Scene, tracer: &dyn Tracer, opts: &RenderOptions) -> Result<RenderResult> {
     let plan = scene.plan();
-    let integ = Whitted::new(scene, tracer, plan);
+    let integ = integrator::create(scene, tracer, plan);
     let (w, h) = (scene.width, scene.height);
     let bar = if opts.quiet {
         indicatif::ProgressBar::hidden()
@@ -100,7 +100,7 @@ pub fn render(scene: &Scene, tracer: &dyn Tracer, opts: &RenderOptions) -> Resul
             .map(|(y, row)| {
                 let mut c = Counters::default();
                 for (x, px) in row.iter_mut().enumerate() {
-                    *px = render_pixel(scene, &integ, &plan, x as u32, y as u32, &mut c);
+                    *px = render_pixel(scene, integ.as_ref(), &plan, x as u32, y as u32, &mut c);
                 }
                 bar.inc(1);
                 c

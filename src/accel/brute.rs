@@ -23,7 +23,7 @@ impl BruteForce {
 
 impl Tracer for BruteForce {
     fn name(&self) -> String {
-        "brute".into()
+        format!("brute{}", self.test.label_suffix())
     }
 
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
