@@ -110,7 +110,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     out.image.write(&args.output)?;
     let st = &out.stats;
     if let Some(p) = &args.stats {
-        let json = serde_json::to_string_pretty(st).map_err(|e| Error::file(p, format!("cannot serialise stats: {e}")))?;
+        let json =
+            serde_json::to_string_pretty(st).map_err(|e| Error::file(p, format!("cannot serialise stats: {e}")))?;
         std::fs::write(p, json).map_err(|e| Error::file(p, format!("cannot write stats: {e}")))?;
     }
     if !args.quiet {

@@ -11,8 +11,8 @@ use glam::Vec3;
 use crate::accel::Tracer;
 use crate::features::Plan;
 use crate::geometry::Ray;
-use crate::scene::Scene;
 use crate::rng::Pcg32;
+use crate::scene::Scene;
 
 /// Work counters: what a render actually did. Summed per row in a fixed
 /// order, so they are identical for any thread count.
