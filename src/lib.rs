@@ -24,6 +24,7 @@ pub mod pipeline;
 pub mod post;
 pub mod rays;
 pub mod render;
+pub mod report;
 pub mod rng;
 pub mod sampler;
 pub mod scene;

@@ -1,6 +1,7 @@
 //! Scenes: loading a scene file into the primitives, shading data, lights and
 //! camera that the renderer and every tracer use.
 
+pub mod export;
 pub mod file;
 
 use std::collections::HashMap;
@@ -118,7 +119,17 @@ impl Scene {
 
     /// Load a scene file and apply command-line overrides.
     pub fn load_with(path: &Path, ov: &Overrides) -> Result<Self> {
-        let mut file = read_scene_file(path)?;
+        Self::from_file_with(read_scene_file(path)?, path, ov)
+    }
+
+    /// Read a scene file without building the scene (errors name `path`).
+    pub fn read_file(path: &Path) -> Result<SceneFile> {
+        read_scene_file(path)
+    }
+
+    /// Build a scene from a parsed file that lives at `path` (relative paths
+    /// resolve against its folder), with command-line overrides applied.
+    pub fn from_file_with(mut file: SceneFile, path: &Path, ov: &Overrides) -> Result<Self> {
         if let Some(w) = ov.width {
             file.image.width = w;
         }
