@@ -234,19 +234,7 @@ mod tests {
 
     #[test]
     fn brute_reference_agrees_with_itself() {
-        let p = [
-            Vec3::new(1.0, 1.0, 1.0),
-            Vec3::new(1.0, -1.0, -1.0),
-            Vec3::new(-1.0, 1.0, -1.0),
-            Vec3::new(-1.0, -1.0, 1.0),
-        ]
-        .map(|v| v * 0.5);
-        let f = [[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]];
-        let prims = Arc::new(Primitives {
-            triangles: f.iter().map(|t| Triangle { v: t.map(|i| p[i]) }).collect(),
-            spheres: vec![],
-        });
-        let ctx = RayContext::with_defaults(prims);
+        let ctx = RayContext::with_defaults(crate::rays::sets::tetra());
         let opts = ParityOptions {
             count: 3000,
             reference: Reference::Brute,
