@@ -23,8 +23,8 @@ fn render(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
     let out = dir.join(name);
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_box_parallelogram_light.json");
     let mut args: Vec<&std::ffi::OsStr> = vec!["render".as_ref(), scene.as_os_str(), "-o".as_ref(), out.as_os_str()];
-    args.extend(["--width", "96", "--height", "72", "--quiet"].iter().map(|s| std::ffi::OsStr::new(s)));
-    args.extend(extra.iter().map(|s| std::ffi::OsStr::new(s)));
+    args.extend(["--width", "96", "--height", "72", "--quiet"].iter().map(std::ffi::OsStr::new));
+    args.extend(extra.iter().map(std::ffi::OsStr::new));
     let (code, _, err) = rtdiff(&args);
     assert_eq!(code, 0, "{err}");
     out
@@ -32,7 +32,7 @@ fn render(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
 
 fn compare_cli(a: &Path, b: &Path, extra: &[&str]) -> (i32, String, String) {
     let mut args: Vec<&std::ffi::OsStr> = vec!["compare".as_ref(), a.as_os_str(), b.as_os_str()];
-    args.extend(extra.iter().map(|s| std::ffi::OsStr::new(s)));
+    args.extend(extra.iter().map(std::ffi::OsStr::new));
     rtdiff(&args)
 }
 
