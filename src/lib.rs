@@ -10,6 +10,7 @@ pub mod backends;
 pub mod bvh;
 pub mod camera;
 pub mod cli;
+pub mod debug;
 pub mod embree;
 pub mod error;
 pub mod features;
