@@ -8,7 +8,8 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use rtdiff::accel::{EmbreeQuality, Tracer};
+use rtdiff::accel::Tracer;
+use rtdiff::backends::EmbreeQuality;
 use rtdiff::embree::{Device, EmbreeTracer};
 use rtdiff::rays::{SetKind, generate};
 

@@ -9,7 +9,7 @@
 
 use std::path::Path;
 
-use rtdiff::accel;
+use rtdiff::backends;
 use rtdiff::features::FEATURE_NAMES;
 use rtdiff::render::{RenderOptions, render};
 use rtdiff::scene::{Overrides, Scene};
@@ -34,7 +34,7 @@ fn main() -> rtdiff::Result<()> {
         ];
         let tracers = scenes
             .iter()
-            .map(|s| accel::build_tracer(s.prims.clone(), &s.accel))
+            .map(|s| backends::build_tracer(s.prims.clone(), &s.accel))
             .collect::<rtdiff::Result<Vec<_>>>()?;
         let mut times = [Vec::new(), Vec::new()];
         for _ in 0..rounds {

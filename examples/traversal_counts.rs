@@ -5,7 +5,7 @@
 //!
 //! `cargo run --release --example traversal_counts -- [mesh.obj] [bins]`
 
-use rtdiff::accel::{AccelConfig, Builder};
+use rtdiff::backends::{AccelConfig, Builder};
 use rtdiff::bvh::wide::TraversalCounts;
 use rtdiff::camera::Camera;
 use rtdiff::geometry::TriangleTest;

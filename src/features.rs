@@ -142,6 +142,8 @@ pub struct Params {
     pub bloom: BloomParams,
     /// How secondary rays leave surfaces.
     pub ray_offset: SpawnOffset,
+    /// Which integrator renders the scene (see [`crate::integrator::create`]).
+    pub integrator: crate::integrator::IntegratorKind,
 }
 
 impl Default for Params {
@@ -154,6 +156,7 @@ impl Default for Params {
             dof_samples: 16,
             bloom: BloomParams::default(),
             ray_offset: SpawnOffset::Robust,
+            integrator: crate::integrator::IntegratorKind::Whitted,
         }
     }
 }

@@ -6,11 +6,11 @@
 //! differential harness beside it.
 
 pub mod accel;
+pub mod backends;
 pub mod bvh;
 pub mod camera;
 pub mod cli;
 pub mod debug;
-#[cfg(feature = "embree")]
 pub mod embree;
 pub mod error;
 pub mod features;
@@ -23,6 +23,7 @@ pub mod limits;
 pub mod material;
 pub mod mesh;
 pub mod perf;
+pub mod pipeline;
 pub mod post;
 pub mod rays;
 pub mod render;

@@ -10,7 +10,7 @@ use crate::accel::Tracer;
 use crate::error::{Error, Result};
 use crate::features::Plan;
 use crate::film::Image;
-use crate::integrator::{Counters, Integrator, Whitted};
+use crate::integrator::{self, Counters, Integrator};
 use crate::rng::Pcg32;
 use crate::scene::Scene;
 
@@ -111,7 +111,7 @@ pub fn render(scene: &Scene, tracer: &dyn Tracer, opts: &RenderOptions) -> Resul
     }
     crate::scene::validate::check_render_work(scene)?;
     let plan = scene.plan();
-    let integ = Whitted::new(scene, tracer, plan);
+    let integ = integrator::create(scene, tracer, plan);
     let (w, h) = (scene.width, scene.height);
     let bar = progress_bar(h as u64, opts.quiet, "rendering");
     let mut image = Image::new(w, h);
@@ -124,7 +124,7 @@ pub fn render(scene: &Scene, tracer: &dyn Tracer, opts: &RenderOptions) -> Resul
             .map(|(y, row)| {
                 let mut c = Counters::default();
                 for (x, px) in row.iter_mut().enumerate() {
-                    *px = render_pixel(scene, &integ, &plan, x as u32, y as u32, &mut c);
+                    *px = render_pixel(scene, integ.as_ref(), &plan, x as u32, y as u32, &mut c);
                 }
                 bar.inc(1);
                 c

@@ -8,7 +8,8 @@ use std::sync::Arc;
 
 use common::{all_configs, cornell, load_mesh, parity_rays, spheres};
 use rayon::prelude::*;
-use rtdiff::accel::{AccelConfig, BruteForce, Tracer, Traversal, build_tracer};
+use rtdiff::accel::{BruteForce, Tracer};
+use rtdiff::backends::{AccelConfig, Traversal, build_tracer};
 use rtdiff::bvh::BvhTracer;
 use rtdiff::geometry::{Hit, Primitives, TriangleTest};
 

@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use common::{CORNELL_BOXES, CORNELL_ROOM_TRIS, cornell};
 use glam::{DVec3, Vec3};
-use rtdiff::accel::{AccelConfig, Traversal, build_tracer};
+use rtdiff::backends::{AccelConfig, Traversal, build_tracer};
 use rtdiff::camera::Camera;
 use rtdiff::geometry::Hit;
 use rtdiff::geometry::offset::SpawnOffset;

@@ -10,7 +10,7 @@ use std::sync::Arc;
 use common::{icosphere, load_mesh};
 use glam::Vec3;
 use rayon::prelude::*;
-use rtdiff::accel::{AccelConfig, Builder, Traversal, build_tracer};
+use rtdiff::backends::{AccelConfig, Builder, Traversal, build_tracer};
 use rtdiff::geometry::{Primitives, Ray, Triangle, TriangleTest};
 use rtdiff::rng::Pcg32;
 

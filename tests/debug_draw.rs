@@ -9,7 +9,8 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use rtdiff::accel::{self, AccelConfig, Backend, Builder, Traversal};
+use rtdiff::backends;
+use rtdiff::backends::{AccelConfig, Backend, Builder, Traversal};
 use rtdiff::bvh::{BvhTracer, TraversalCounts, VisitLog};
 use rtdiff::debug::{self, Metric, overlay};
 use rtdiff::geometry::TriangleTest;
@@ -48,7 +49,7 @@ fn overlays(pixel: (u32, u32)) -> Vec<Box<dyn overlay::Overlay>> {
 fn drawing_never_changes_the_render_under_it() {
     for (name, pixel) in [("cornell_box", (40, 52)), ("dragon", (48, 48))] {
         let mut scene = load(name, 96, &[]);
-        let tracer = accel::build_tracer(scene.prims.clone(), &scene.accel).unwrap();
+        let tracer = backends::build_tracer(scene.prims.clone(), &scene.accel).unwrap();
         let plain = render(&scene, tracer.as_ref(), &QUIET).unwrap().image;
         let accel = scene.accel;
         for o in overlays(pixel) {
@@ -176,7 +177,7 @@ fn heatmap_totals_equal_the_traversal_counters_of_the_same_rays() {
 fn heatmap_rays_equal_the_renders_ray_counters_for_any_thread_count() {
     for name in ["cornell_box", "cornell_box_parallelogram_light", "all_features"] {
         let scene = load(name, 32, &[]);
-        let tracer = accel::build_tracer(scene.prims.clone(), &scene.accel).unwrap();
+        let tracer = backends::build_tracer(scene.prims.clone(), &scene.accel).unwrap();
         let counters = render(&scene, tracer.as_ref(), &QUIET).unwrap().counters;
         let cfg = AccelConfig { backend: Backend::Native, ..scene.accel };
         let one = debug::heatmap(&scene, &cfg, &RenderOptions { threads: Some(1), quiet: true }).unwrap();

@@ -6,7 +6,8 @@ use std::mem::{align_of, size_of};
 use std::sync::Arc;
 
 use glam::Vec3;
-use rtdiff::accel::{AccelConfig, Backend, EmbreeQuality, Tracer, build_tracer};
+use rtdiff::accel::Tracer;
+use rtdiff::backends::{AccelConfig, Backend, EmbreeQuality, build_tracer};
 use rtdiff::embree::{Device, EmbreeTracer, ffi};
 use rtdiff::geometry::{Primitives, Ray, Triangle, sphere::Sphere};
 

@@ -21,7 +21,7 @@
 
 use std::path::PathBuf;
 
-use rtdiff::accel::{AccelConfig, Backend};
+use rtdiff::backends::{AccelConfig, Backend};
 use rtdiff::geometry::TriangleTest;
 use rtdiff::rays::{RayContext, SetKind};
 use rtdiff::verify::hits::{self as parity, ParityOptions, ParityReport, Reference};

@@ -5,7 +5,9 @@
 
 mod common;
 
-use rtdiff::accel::{self, Backend, Tracer};
+use rtdiff::accel::Tracer;
+use rtdiff::backends;
+use rtdiff::backends::Backend;
 use rtdiff::render::{RenderOptions, render};
 use rtdiff::scene::{Overrides, Scene};
 
@@ -43,9 +45,9 @@ fn embree_and_native_images_agree_except_at_ties() {
     for path in names {
         let ov = Overrides { width: Some(96), height: Some(96), spp: Some(1), ..Default::default() };
         let scene = Scene::load_with(&path, &ov).unwrap();
-        let native = accel::build_tracer(scene.prims.clone(), &scene.accel).unwrap();
-        let cfg = accel::AccelConfig { backend: Backend::Embree, ..scene.accel };
-        let embree = accel::build_tracer(scene.prims.clone(), &cfg).unwrap();
+        let native = backends::build_tracer(scene.prims.clone(), &scene.accel).unwrap();
+        let cfg = backends::AccelConfig { backend: Backend::Embree, ..scene.accel };
+        let embree = backends::build_tracer(scene.prims.clone(), &cfg).unwrap();
         let opts = RenderOptions { threads: None, quiet: true };
         let a = render(&scene, native.as_ref(), &opts).unwrap();
         let b = render(&scene, embree.as_ref(), &opts).unwrap();

@@ -531,7 +531,7 @@ fn debug_tree_records_blocked_shadow_rays_and_reflections() {
             0.0,
         ),
     );
-    let tracer = rtdiff::accel::build_tracer(s.prims.clone(), &s.accel).unwrap();
+    let tracer = rtdiff::backends::build_tracer(s.prims.clone(), &s.accel).unwrap();
     let integ = rtdiff::integrator::Whitted::new(&s, tracer.as_ref(), s.plan());
     let mut tree = RayTree::default();
     let mut c = rtdiff::integrator::Counters::default();

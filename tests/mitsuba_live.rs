@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use glam::Vec3;
-use rtdiff::accel;
+use rtdiff::backends;
 use rtdiff::film::Image;
 use rtdiff::render::{RenderOptions, render};
 use rtdiff::scene::{Overrides, Scene};
@@ -61,7 +61,7 @@ fn round_trip(py: &Path, scene: &str, size: u32, extra: &[&str]) -> (Image, Imag
         .collect();
     let ov = Overrides { width: Some(size), height: Some(size), features, ..Default::default() };
     let sc = Scene::load_with(&scene_path, &ov).unwrap();
-    let tracer = accel::build_tracer(sc.prims.clone(), &sc.accel).unwrap();
+    let tracer = backends::build_tracer(sc.prims.clone(), &sc.accel).unwrap();
     let ours = render(&sc, tracer.as_ref(), &RenderOptions { threads: None, quiet: true }).unwrap().image;
     let theirs = Image::read_exr(&exr).unwrap();
     let _ = std::fs::remove_dir_all(&dir);

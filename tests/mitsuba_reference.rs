@@ -20,7 +20,8 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::Vec3;
-use rtdiff::accel::{self, Tracer};
+use rtdiff::accel::Tracer;
+use rtdiff::backends;
 use rtdiff::film::Image;
 use rtdiff::geometry::{Hit, Ray};
 use rtdiff::integrator::debug::{RayKind, RayNode, RayTree};
@@ -126,7 +127,7 @@ fn load(r: &Reference, seed: u64, tweak: &dyn Fn(&mut SceneFile)) -> Scene {
 }
 
 fn render_with(scene: &Scene, wrap: &dyn Fn(Box<dyn Tracer>) -> Box<dyn Tracer>) -> Image {
-    let tracer = wrap(accel::build_tracer(scene.prims.clone(), &scene.accel).unwrap());
+    let tracer = wrap(backends::build_tracer(scene.prims.clone(), &scene.accel).unwrap());
     render(scene, tracer.as_ref(), &RenderOptions { threads: None, quiet: true }).unwrap().image
 }
 
@@ -289,7 +290,7 @@ fn rel(a: Vec3, b: Vec3) -> f32 {
 
 fn exact_check(scene: &Scene, reference: &Image, img: &Image) -> Exact {
     assert_eq!((reference.width, reference.height), (img.width, img.height));
-    let tracer = accel::build_tracer(scene.prims.clone(), &scene.accel).unwrap();
+    let tracer = backends::build_tracer(scene.prims.clone(), &scene.accel).unwrap();
     let mut bad = Vec::new();
     let mut max_rel = 0f32;
     for y in 0..img.height {

@@ -4,7 +4,7 @@
 
 mod common;
 
-use rtdiff::accel;
+use rtdiff::backends;
 use rtdiff::render::{RenderOptions, render};
 use rtdiff::scene::{Overrides, Scene};
 
@@ -15,7 +15,7 @@ fn every_scene_renders_with_its_defaults() {
     for path in names {
         let ov = Overrides { width: Some(24), height: Some(24), ..Default::default() };
         let scene = Scene::load_with(&path, &ov).unwrap_or_else(|e| panic!("{e}"));
-        let tracer = accel::build_tracer(scene.prims.clone(), &scene.accel).unwrap();
+        let tracer = backends::build_tracer(scene.prims.clone(), &scene.accel).unwrap();
         let r = render(&scene, tracer.as_ref(), &RenderOptions { threads: None, quiet: true }).unwrap();
         let lit = r.image.pixels.iter().filter(|p| p.max_element() > 0.01).count();
         assert!(lit > 10, "{}: only {lit} of 576 pixels are not black", path.display());

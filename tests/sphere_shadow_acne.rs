@@ -16,7 +16,7 @@
 mod common;
 
 use glam::{DVec3, Vec3};
-use rtdiff::accel::build_tracer;
+use rtdiff::backends::build_tracer;
 use rtdiff::render::{RenderOptions, render};
 
 /// (lit pixels by the closed form, of which rendered black).

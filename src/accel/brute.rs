@@ -23,7 +23,7 @@ impl BruteForce {
 
 impl Tracer for BruteForce {
     fn name(&self) -> String {
-        "brute".into()
+        format!("brute{}", self.test.label_suffix())
     }
 
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
@@ -32,11 +32,7 @@ impl Tracer for BruteForce {
         let mut best = None;
         for i in 0..self.prims.len() {
             if let Some((t, u, v)) = self.prims.intersect_prim(i, &r, &wr, self.test) {
-                // Strictly closer only, so the lowest id wins a tie.
-                if best.is_none_or(|b: Hit| t < b.t) {
-                    best = Some(Hit { t, prim: i as u32, u, v });
-                    r.t_max = t;
-                }
+                Hit::offer(&mut best, &mut r, Hit { t, prim: i as u32, u, v });
             }
         }
         best

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 use glam::{Vec3A, Vec4};
 use rayon::prelude::*;
 
-use crate::accel::Builder;
+use super::config::Builder;
 use crate::geometry::{Aabb, Prim, Primitives};
 
 use super::{LeafPrims, Node};

@@ -3,7 +3,7 @@
 //! `select_nth_unstable` (the median element of an odd count goes right),
 //! nodes stop splitting at `leaf_size` primitives or at level 100.
 
-use crate::accel::Builder;
+use super::config::Builder;
 use crate::geometry::{Aabb, Primitives};
 
 use super::build::{BinaryBvh, BoxA, BuildInput, PrimRef, Split, Splitter, build_with};

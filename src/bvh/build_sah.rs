@@ -12,7 +12,7 @@
 
 use glam::{UVec4, Vec3A};
 
-use crate::accel::Builder;
+use super::config::Builder;
 use crate::geometry::{Aabb, Primitives};
 
 use super::build::{BinaryBvh, BoxA, BuildInput, PrimRef, Split, Splitter, build_with, centroid_bounds_of};

@@ -9,7 +9,7 @@
 //! the more balanced split. Flat geometry (zero volume) therefore stays in
 //! large leaves, as in the reports' Cornell box (10 triangles per leaf).
 
-use crate::accel::Builder;
+use super::config::Builder;
 use crate::geometry::{Aabb, Primitives};
 
 use super::build::{BinaryBvh, BoxA, BuildInput, PrimRef, Split, Splitter, build_with, partition};

@@ -186,7 +186,7 @@ mod tests {
     use glam::Vec3;
 
     use super::*;
-    use crate::accel::{AccelConfig, Builder};
+    use crate::backends::{AccelConfig, Builder};
     use crate::geometry::{Aabb, Primitives, Triangle};
     use crate::rng::Pcg32;
 

@@ -17,6 +17,7 @@ pub mod build_median;
 pub mod build_sah;
 pub mod build_sah_volume;
 pub mod collapse;
+pub mod config;
 pub mod count;
 pub mod node;
 pub mod packet;
@@ -37,17 +38,20 @@ pub use prims::LeafPrims;
 pub use stats::BvhStats;
 pub use wide::WideBvh;
 
-use crate::accel::{AccelConfig, Builder, Tracer, Traversal};
-use crate::geometry::{Hit, Primitives, Ray, TriangleTest};
+pub use config::{Builder, BvhConfig, Traversal};
+
+use crate::accel::Tracer;
+use crate::geometry::{Hit, Primitives, Ray};
 
 /// Build a binary BVH over `prims` with the builder and parameters of `cfg`
 /// (`leaf_size` for `median`, `bins` for `sah`).
-pub fn build_binary(prims: &Primitives, cfg: &AccelConfig) -> BinaryBvh {
-    build::build_with(prims, splitter(cfg).as_ref(), cfg.builder)
+pub fn build_binary(prims: &Primitives, cfg: impl Into<BvhConfig>) -> BinaryBvh {
+    let cfg = cfg.into();
+    build::build_with(prims, splitter(&cfg).as_ref(), cfg.builder)
 }
 
 /// The split strategy of `cfg`'s builder.
-fn splitter(cfg: &AccelConfig) -> Box<dyn build::Splitter> {
+fn splitter(cfg: &BvhConfig) -> Box<dyn build::Splitter> {
     match cfg.builder {
         Builder::Median => Box::new(build_median::MedianSplit { leaf_size: cfg.leaf_size }),
         Builder::SahVolume => Box::new(build_sah_volume::VolumeSplit),
@@ -57,13 +61,13 @@ fn splitter(cfg: &AccelConfig) -> Box<dyn build::Splitter> {
 
 /// Build the tree `cfg` asks for and collapse it into the 8-wide BVH of the
 /// `fast` traversal, gathering the leaves' triangles straight into packets.
-pub fn build_wide(prims: &Primitives, cfg: &AccelConfig) -> WideBvh {
-    WideBvh::from_tree(prims, &build::build_tree(prims, splitter(cfg).as_ref()))
+pub fn build_wide(prims: &Primitives, cfg: impl Into<BvhConfig>) -> WideBvh {
+    WideBvh::from_tree(prims, &build::build_tree(prims, splitter(&cfg.into()).as_ref()))
 }
 
 /// Build the binary BVH `cfg` asks for and its 8-wide collapse, and gather
 /// their statistics (`build_ms` covers the binary build plus the collapse).
-pub fn stats_for(prims: &Primitives, cfg: &AccelConfig) -> BvhStats {
+pub fn stats_for(prims: &Primitives, cfg: impl Into<BvhConfig>) -> BvhStats {
     let bin = build_binary(prims, cfg);
     let mut stats = BvhStats::of(&bin, None);
     let start = std::time::Instant::now();
@@ -83,20 +87,19 @@ enum Tree {
 /// A [`Tracer`] over rtdiff's BVH with a chosen builder and traversal.
 pub struct BvhTracer {
     tree: Tree,
-    builder: Builder,
-    traversal: Traversal,
-    test: TriangleTest,
+    cfg: BvhConfig,
 }
 
 impl BvhTracer {
     /// Build the BVH `cfg` asks for (the `fast` traversal also collapses it to 8-wide nodes).
-    pub fn new(prims: &Primitives, cfg: &AccelConfig) -> Self {
+    pub fn new(prims: &Primitives, cfg: impl Into<BvhConfig>) -> Self {
+        let cfg = cfg.into();
         let tree = if cfg.traversal == Traversal::Fast {
             Tree::Wide(build_wide(prims, cfg))
         } else {
             Tree::Binary(build_binary(prims, cfg))
         };
-        Self { tree, builder: cfg.builder, traversal: cfg.traversal, test: cfg.triangle_test }
+        Self { tree, cfg }
     }
 
     /// Use the portable scalar box test in the `fast` traversal even when AVX2 is available.
@@ -105,10 +108,6 @@ impl BvhTracer {
             w.set_scalar();
         }
     }
-}
-
-fn kebab<T: clap::ValueEnum>(v: &T) -> String {
-    v.to_possible_value().map_or_else(String::new, |p| p.get_name().to_string())
 }
 
 impl BvhTracer {
@@ -133,10 +132,10 @@ impl BvhTracer {
     #[inline]
     pub fn intersect_with<C: Count>(&self, ray: &Ray, counts: &mut C) -> Option<Hit> {
         counts.ray();
-        let t = self.test;
+        let t = self.cfg.triangle_test;
         match &self.tree {
             Tree::Wide(w) => w.intersect_counting(ray, t, counts),
-            Tree::Binary(b) => match self.traversal {
+            Tree::Binary(b) => match self.cfg.traversal {
                 Traversal::Basic | Traversal::Fast => traverse_basic::intersect_counting(b, ray, t, counts),
                 Traversal::PriorityQueue => {
                     traverse_ordered::intersect_counting::<traverse_priority_queue::HeapFrontier, C>(b, ray, t, counts)
@@ -155,10 +154,10 @@ impl BvhTracer {
     #[inline]
     pub fn occluded_with<C: Count>(&self, ray: &Ray, counts: &mut C) -> bool {
         counts.ray();
-        let t = self.test;
+        let t = self.cfg.triangle_test;
         match &self.tree {
             Tree::Wide(w) => w.occluded_counting(ray, t, counts),
-            Tree::Binary(b) => match self.traversal {
+            Tree::Binary(b) => match self.cfg.traversal {
                 Traversal::Basic | Traversal::Fast => traverse_basic::occluded_counting(b, ray, t, counts),
                 Traversal::PriorityQueue => {
                     traverse_ordered::occluded_counting::<traverse_priority_queue::HeapFrontier, C>(b, ray, t, counts)
@@ -176,7 +175,7 @@ impl BvhTracer {
 
 impl Tracer for BvhTracer {
     fn name(&self) -> String {
-        format!("bvh-{}/{}", kebab(&self.builder), kebab(&self.traversal))
+        self.cfg.label()
     }
 
     fn intersect(&self, ray: &Ray) -> Option<Hit> {

@@ -201,17 +201,11 @@ impl TriPackets {
     }
 }
 
-/// Offer hit `(t, id, u, v)` (already within `ray`'s interval): it becomes the
-/// best when nearer, or equally near with a lower id; `ray.t_max` follows.
+/// Offer hit `(t, id, u, v)` (already within `ray`'s interval) under the
+/// shared tie rule [`Hit::offer`].
 #[inline(always)]
 fn offer(best: &mut Option<Hit>, ray: &mut Ray, t: f32, id: u32, u: f32, v: f32) -> bool {
-    if best.is_none_or(|b| t < b.t || (t == b.t && id < b.prim)) {
-        *best = Some(Hit { t, prim: id, u, v });
-        ray.t_max = t;
-        true
-    } else {
-        false
-    }
+    Hit::offer(best, ray, Hit { t, prim: id, u, v })
 }
 
 /// The watertight test on four lanes: `(hit mask, zero-edge mask, t, u, v)`.

@@ -100,11 +100,7 @@ impl LeafPrims {
         for k in first as usize..(first + count) as usize {
             if let Some((t, u, v)) = self.intersect(k, ray, wr, test) {
                 let id = self.entries[k].id;
-                if best.is_none_or(|b| t < b.t || (t == b.t && id < b.prim)) {
-                    *best = Some(Hit { t, prim: id, u, v });
-                    ray.t_max = t;
-                    changed = true;
-                }
+                changed |= Hit::offer(best, ray, Hit { t, prim: id, u, v });
             }
         }
         changed

@@ -596,7 +596,7 @@ mod tests {
     use glam::Vec3;
 
     use super::*;
-    use crate::accel::AccelConfig;
+    use crate::backends::AccelConfig;
     use crate::geometry::Triangle;
     use crate::rng::Pcg32;
 

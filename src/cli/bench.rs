@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use crate::accel::{AccelConfig, Builder, Traversal, build_tracer};
+use crate::backends::{AccelConfig, Builder, Traversal, build_tracer};
 use crate::error::{Error, Result};
 use crate::limits;
 use crate::perf::bench::{BenchOptions, BenchReport, LIGHT, RaySets};

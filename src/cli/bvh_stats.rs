@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use crate::accel::{AccelConfig, Builder, Traversal};
+use crate::backends::{AccelConfig, Builder, Traversal};
 use crate::bvh::BvhStats;
 use crate::error::{Error, Result};
 

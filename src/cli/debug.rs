@@ -8,7 +8,7 @@
 use std::fmt::Write;
 use std::path::PathBuf;
 
-use crate::accel::{self, Builder, Traversal};
+use crate::backends::{self, Builder, Traversal};
 use crate::debug::{self, Metric};
 use crate::error::{Error, Result};
 use crate::integrator::Counters;
@@ -233,7 +233,7 @@ pub fn run(args: &DebugArgs) -> Result<()> {
     if x >= scene.width || y >= scene.height {
         return Err(Error::Invalid(format!("pixel ({x}, {y}) is outside the {}x{} image", scene.width, scene.height)));
     }
-    let tracer = accel::build_tracer(scene.prims.clone(), &scene.accel)?;
+    let tracer = backends::build_tracer(scene.prims.clone(), &scene.accel)?;
     let integ = Whitted::new(&scene, tracer.as_ref(), scene.plan());
     let mut tree = RayTree::default();
     let mut counters = Counters::default();

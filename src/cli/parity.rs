@@ -76,7 +76,7 @@ pub fn run(args: &ParityArgs) -> Result<()> {
         max_examples: args.examples,
         sweep_count: (args.sweep_count > 0).then_some(args.sweep_count),
         variants: if args.default_only {
-            vec![crate::accel::AccelConfig::default()]
+            vec![crate::backends::AccelConfig::default()]
         } else {
             parity::native_variants()
         },

@@ -1,14 +1,13 @@
-//! `rtdiff render`: scene file in, image out.
+//! `rtdiff render`: parses the arguments, renders through
+//! [`crate::pipeline::render_scene`] and writes the image and statistics.
 
 use std::path::PathBuf;
-use std::time::Instant;
 
-use crate::accel::{self, Backend, Builder, Traversal};
+use crate::backends::{Backend, Builder, Traversal};
 use crate::error::{Error, Result};
 use crate::geometry::TriangleTest;
 use crate::limits;
-use crate::post::bloom;
-use crate::render::{RenderOptions, render};
+use crate::render::RenderOptions;
 use crate::scene::{Overrides, Scene};
 
 /// Arguments of `rtdiff render`.
@@ -116,48 +115,30 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if scene.degenerate_skipped > 0 && !args.quiet {
         eprintln!("rtdiff: warning: skipped {} zero-area triangles", scene.degenerate_skipped);
     }
-    let t0 = Instant::now();
-    let tracer = accel::build_tracer(scene.prims.clone(), &scene.accel)?;
-    let build_ms = t0.elapsed().as_secs_f64() * 1e3;
-    let result = render(&scene, tracer.as_ref(), &RenderOptions { threads: args.threads, quiet: args.quiet })?;
-    let mut image = result.image.clone();
-    if result.plan.bloom {
-        let st = bloom::bloom_stages(&image, &scene.params.bloom);
-        if args.bloom_stages {
-            for (name, img) in [("bright", &st.bright), ("blurred", &st.blurred), ("scaled", &st.scaled)] {
-                img.write(&stage_path(&args.output, name))?;
-            }
+    let out = crate::pipeline::render_scene(&scene, &RenderOptions { threads: args.threads, quiet: args.quiet })?;
+    if let (true, Some(st)) = (args.bloom_stages, &out.bloom) {
+        for (name, img) in [("bright", &st.bright), ("blurred", &st.blurred), ("scaled", &st.scaled)] {
+            img.write(&stage_path(&args.output, name))?;
         }
-        image = st.result;
     }
-    image.write(&args.output)?;
-    let render_ms = result.seconds * 1e3;
-    let rays = result.counters.total_rays();
+    out.image.write(&args.output)?;
+    let st = &out.stats;
     if let Some(p) = &args.stats {
-        let json = serde_json::json!({
-            "scene": args.scene,
-            "triangles": scene.prims.triangles.len(),
-            "spheres": scene.prims.spheres.len(),
-            "tracer": tracer.name(),
-            "build_ms": build_ms,
-            "render_ms": render_ms,
-            "counters": result.counters,
-            "plan": result.plan,
-        });
-        std::fs::write(p, serde_json::to_string_pretty(&json).unwrap_or_default())
-            .map_err(|e| Error::file(p, format!("cannot write stats: {e}")))?;
+        let json =
+            serde_json::to_string_pretty(st).map_err(|e| Error::file(p, format!("cannot serialise stats: {e}")))?;
+        std::fs::write(p, json).map_err(|e| Error::file(p, format!("cannot write stats: {e}")))?;
     }
     if !args.quiet {
         eprintln!(
             "{}: {} triangles, {} spheres | {} build {:.1} ms | render {:.1} ms | {} rays, {:.2} Mrays/s -> {}",
             args.scene.display(),
-            scene.prims.triangles.len(),
-            scene.prims.spheres.len(),
-            tracer.name(),
-            build_ms,
-            render_ms,
-            rays,
-            rays as f64 / result.seconds.max(1e-9) / 1e6,
+            st.triangles,
+            st.spheres,
+            st.tracer,
+            st.build_ms,
+            st.render_ms,
+            st.rays,
+            st.mrays_per_s,
             args.output.display()
         );
     }

@@ -13,7 +13,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
-use crate::accel::{AccelConfig, Backend, build_tracer};
+use crate::backends::{AccelConfig, Backend, build_tracer};
 use crate::error::{Error, Result};
 use crate::geometry::Ray;
 

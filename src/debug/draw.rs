@@ -4,7 +4,7 @@
 use super::lines::Lines;
 use super::overlay::{Context, Overlay};
 use super::raster::{DepthBuffer, draw_lines};
-use crate::accel::{self, AccelConfig};
+use crate::backends::{self, AccelConfig};
 use crate::camera::Camera;
 use crate::error::Result;
 use crate::film::Image;
@@ -57,7 +57,7 @@ pub fn draw(
     view: Option<Camera>,
     opts: &RenderOptions,
 ) -> Result<DrawOutput> {
-    let tracer = accel::build_tracer(scene.prims.clone(), &scene.accel)?;
+    let tracer = backends::build_tracer(scene.prims.clone(), &scene.accel)?;
     let lines = overlay.lines(&Context { scene, tracer: tracer.as_ref(), accel: *accel })?;
     let original = scene.camera.clone();
     if let Some(v) = view {

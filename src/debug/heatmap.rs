@@ -13,7 +13,8 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::text::{draw_text, text_width};
-use crate::accel::{AccelConfig, Backend, Tracer};
+use crate::accel::Tracer;
+use crate::backends::{AccelConfig, Backend};
 use crate::bvh::{BvhTracer, TraversalCounts};
 use crate::error::{Error, Result};
 use crate::geometry::{Hit, Ray};

@@ -1,6 +1,6 @@
 //! A committed Embree scene built from rtdiff's primitives.
 
-use crate::accel::EmbreeQuality;
+use super::EmbreeQuality;
 use crate::error::{Error, Result};
 use crate::geometry::{Aabb, Primitives};
 

@@ -11,7 +11,8 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
-use crate::accel::{EmbreeQuality, Tracer};
+use super::EmbreeQuality;
+use crate::accel::Tracer;
 use crate::error::Result;
 use crate::geometry::{Hit, Primitives, Ray};
 
@@ -131,12 +132,7 @@ impl EmbreeTracer {
 
 impl Tracer for EmbreeTracer {
     fn name(&self) -> String {
-        let q = match self.quality {
-            EmbreeQuality::Low => "low",
-            EmbreeQuality::Medium => "medium",
-            EmbreeQuality::High => "high",
-        };
-        format!("embree-{q}")
+        self.quality.label()
     }
 
     fn intersect(&self, ray: &Ray) -> Option<Hit> {

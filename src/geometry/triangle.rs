@@ -22,6 +22,16 @@ pub enum TriangleTest {
     MollerTrumbore,
 }
 
+impl TriangleTest {
+    /// Suffix of a tracer label: `""` for the watertight test, `" mt"` for Moller-Trumbore.
+    pub fn label_suffix(self) -> &'static str {
+        match self {
+            TriangleTest::Watertight => "",
+            TriangleTest::MollerTrumbore => " mt",
+        }
+    }
+}
+
 impl std::str::FromStr for TriangleTest {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, Self::Err> {

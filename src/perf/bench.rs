@@ -1,7 +1,7 @@
 //! The benchmark behind `rtdiff bench`: build time per builder and traversal
 //! throughput per tracer on primary, incoherent and shadow ray sets,
 //! single-threaded and with all threads. Tracers come from
-//! [`crate::accel::build_tracer`], so Embree rows appear when the crate is
+//! [`crate::backends::build_tracer`], so Embree rows appear when the crate is
 //! built with `--features embree`.
 
 use std::sync::Arc;
@@ -10,7 +10,8 @@ use glam::Vec3;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::accel::{AccelConfig, Backend, Builder, EmbreeQuality, Tracer, Traversal, build_tracer};
+use crate::accel::Tracer;
+use crate::backends::{AccelConfig, Backend, Builder, EmbreeQuality, Traversal, build_tracer};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::geometry::offset::SpawnOffset;

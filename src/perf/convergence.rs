@@ -307,7 +307,7 @@ fn load(opts: &ConvergenceOptions, feature: Feature, n: u32, seed: u64) -> Resul
 }
 
 fn render_timed(scene: &Scene) -> Result<(Image, f64)> {
-    let tracer = crate::accel::build_tracer(scene.prims.clone(), &scene.accel)?;
+    let tracer = crate::backends::build_tracer(scene.prims.clone(), &scene.accel)?;
     let r = render(scene, tracer.as_ref(), &RenderOptions { threads: None, quiet: true })?;
     Ok((r.image, r.seconds * 1e3))
 }

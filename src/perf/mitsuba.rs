@@ -104,7 +104,7 @@ fn compare_one(root: &Path, dir: &Path, images: &Path, m: &Manifest, e: &Manifes
     force_shading_model(&mut file, e.model);
     let ov = Overrides { width: Some(m.width), height: Some(m.height), seed: Some(0), ..Default::default() };
     let scene = Scene::from_file_with(file, &scene_path, &ov)?;
-    let tracer = crate::accel::build_tracer(scene.prims.clone(), &scene.accel)?;
+    let tracer = crate::backends::build_tracer(scene.prims.clone(), &scene.accel)?;
     let r = render(&scene, tracer.as_ref(), &RenderOptions { threads: None, quiet: true })?;
     let ours: Image = r.image;
     let reference = read_image(&dir.join(&e.image))?;

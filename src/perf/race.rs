@@ -79,7 +79,8 @@ pub struct RaceReport {
 #[cfg(feature = "embree")]
 pub fn race(prims: &Arc<Primitives>, sets: &[(&'static str, &[Ray], bool)], rounds: usize) -> Result<RaceReport> {
     use super::clock::{cpu_seconds, single_pool};
-    use crate::accel::{AccelConfig, Builder, EmbreeQuality, Tracer, Traversal, build_tracer};
+    use crate::accel::Tracer;
+    use crate::backends::{AccelConfig, Builder, EmbreeQuality, Traversal, build_tracer};
     use crate::embree::{Device, EmbreeTracer};
     if rounds == 0 {
         return Err(crate::Error::Invalid("--race needs at least one round".into()));

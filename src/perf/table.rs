@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 
 use super::machine::MachineFacts;
 use super::summary::Measure;
-use crate::accel::{AccelConfig, Backend, Builder, Traversal, build_tracer};
+use crate::backends::{AccelConfig, Backend, Builder, Traversal, build_tracer};
 use crate::error::{Error, Result};
 use crate::render::{RenderOptions, render};
 use crate::scene::{Overrides, Scene};

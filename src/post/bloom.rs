@@ -66,6 +66,7 @@ pub fn blur(img: &Image, kernel: &[f32]) -> Image {
 }
 
 /// Every stage of the bloom, for `--bloom-stages`.
+#[derive(Clone, Debug)]
 pub struct BloomStages {
     /// Pixels at or above the threshold (others black).
     pub bright: Image,

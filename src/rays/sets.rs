@@ -378,25 +378,25 @@ fn generate_one(ctx: &RayContext, kind: SetKind, name: String, seed: u64, count:
     RaySet { name, kind, seed, prims: prims.clone(), rays, tags }
 }
 
+/// A closed tetrahedron of edge `sqrt(2)` centred on the origin (every edge
+/// shared, every vertex fan closed): the unit-test fixture of the ray sets
+/// and of hit parity.
+#[cfg(test)]
+pub(crate) fn tetra() -> Arc<Primitives> {
+    use crate::geometry::Triangle;
+    let p =
+        [Vec3::new(1.0, 1.0, 1.0), Vec3::new(1.0, -1.0, -1.0), Vec3::new(-1.0, 1.0, -1.0), Vec3::new(-1.0, -1.0, 1.0)]
+            .map(|v| v * 0.5);
+    let f = [[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]];
+    Arc::new(Primitives { triangles: f.iter().map(|t| Triangle { v: t.map(|i| p[i]) }).collect(), spheres: vec![] })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::accel::BruteForce;
     use crate::camera::Camera;
-    use crate::geometry::{Triangle, TriangleTest};
-
-    /// A closed tetrahedron (every edge shared, every vertex fan closed).
-    fn tetra() -> Arc<Primitives> {
-        let p = [
-            Vec3::new(1.0, 1.0, 1.0),
-            Vec3::new(1.0, -1.0, -1.0),
-            Vec3::new(-1.0, 1.0, -1.0),
-            Vec3::new(-1.0, -1.0, 1.0),
-        ]
-        .map(|v| v * 0.5);
-        let f = [[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]];
-        Arc::new(Primitives { triangles: f.iter().map(|t| Triangle { v: t.map(|i| p[i]) }).collect(), spheres: vec![] })
-    }
+    use crate::geometry::TriangleTest;
 
     #[test]
     fn rng_is_deterministic_and_uniform_enough() {

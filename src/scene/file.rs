@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use crate::accel::{Backend, Builder, EmbreeQuality, Traversal};
+use crate::backends::{Backend, Builder, EmbreeQuality, Traversal};
 use crate::features::{Features, Params};
 use crate::geometry::TriangleTest;
 use crate::shading::ShadingModelKind;

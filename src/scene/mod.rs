@@ -11,7 +11,7 @@ use std::sync::Arc;
 
 use glam::{Mat3, Vec2, Vec3};
 
-use crate::accel::{AccelConfig, Backend, Builder};
+use crate::backends::{AccelConfig, Backend, Builder};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::features::{Features, Params, Plan};
@@ -55,7 +55,7 @@ pub struct Overrides {
     /// BVH builder.
     pub builder: Option<Builder>,
     /// BVH traversal.
-    pub traversal: Option<crate::accel::Traversal>,
+    pub traversal: Option<crate::backends::Traversal>,
     /// Triangle test.
     pub triangle_test: Option<crate::geometry::TriangleTest>,
 }

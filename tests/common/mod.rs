@@ -7,7 +7,8 @@
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
-use rtdiff::accel::{self, AccelConfig, Builder, Traversal};
+use rtdiff::backends;
+use rtdiff::backends::AccelConfig;
 use rtdiff::film::Image;
 use rtdiff::geometry::{Prim, Primitives, Ray, Sphere, Triangle};
 use rtdiff::mesh::{Content, Mesh, load_mesh as load_mesh_file};
@@ -68,8 +69,8 @@ pub fn scene(dir: &Path, json: &str) -> Scene {
 
 /// Render with the brute-force oracle (and optionally a given thread count).
 pub fn render_with(scene: &Scene, threads: Option<usize>) -> RenderResult {
-    let cfg = AccelConfig { backend: accel::Backend::Brute, ..scene.accel };
-    let tracer = accel::build_tracer(scene.prims.clone(), &cfg).unwrap();
+    let cfg = AccelConfig { backend: backends::Backend::Brute, ..scene.accel };
+    let tracer = backends::build_tracer(scene.prims.clone(), &cfg).unwrap();
     render(scene, tracer.as_ref(), &RenderOptions { threads, quiet: true }).unwrap()
 }
 
@@ -95,19 +96,7 @@ pub fn load_mesh(name: &str) -> Mesh {
 
 /// Every builder x traversal configuration (watertight triangle test).
 pub fn all_configs() -> Vec<AccelConfig> {
-    let mut v = Vec::new();
-    for builder in [Builder::Median, Builder::SahVolume, Builder::Sah] {
-        for traversal in [
-            Traversal::Basic,
-            Traversal::PriorityQueue,
-            Traversal::SortedVector,
-            Traversal::NthElement,
-            Traversal::Fast,
-        ] {
-            v.push(AccelConfig { builder, traversal, ..Default::default() });
-        }
-    }
-    v
+    backends::native_variants()
 }
 
 fn quad(out: &mut Vec<Triangle>, a: Vec3, b: Vec3, c: Vec3, d: Vec3) {

@@ -13,7 +13,8 @@ use glam::Vec3;
 
 use super::lines::Lines;
 use super::project::Projector;
-use crate::accel::{AccelConfig, Tracer};
+use crate::accel::Tracer;
+use crate::backends::AccelConfig;
 use crate::bvh::{BinaryBvh, build_binary};
 use crate::error::{Error, Result};
 use crate::geometry::{Hit, Ray};

@@ -11,7 +11,7 @@
 use glam::Vec3;
 
 use super::{Context, Overlay, node_levels};
-use crate::accel::Builder;
+use crate::backends::Builder;
 use crate::bvh::BinaryBvh;
 use crate::bvh::build_sah::SAH_MAX_BINS;
 use crate::bvh::build_sah_volume::VOLUME_BINS;

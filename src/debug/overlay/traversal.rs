@@ -11,7 +11,7 @@ use std::collections::{BTreeSet, HashMap};
 use glam::Vec3;
 
 use super::{Context, Overlay};
-use crate::accel::AccelConfig;
+use crate::backends::AccelConfig;
 use crate::bvh::count::Visit;
 use crate::bvh::wide::{WIDTH, WideNode};
 use crate::bvh::{BvhTracer, VisitLog};
@@ -100,7 +100,7 @@ impl Overlay for TraversalPath {
 
     fn lines(&self, ctx: &Context) -> Result<Lines> {
         let ray = ctx.pixel_ray(self.pixel.0, self.pixel.1)?;
-        let cfg = AccelConfig { backend: crate::accel::Backend::Native, ..ctx.accel };
+        let cfg = AccelConfig { backend: crate::backends::Backend::Native, ..ctx.accel };
         let bvh = BvhTracer::new(&ctx.scene.prims, &cfg);
         let mut log = VisitLog::default();
         let hit = bvh.intersect_with(&ray, &mut log);

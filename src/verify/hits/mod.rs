@@ -8,6 +8,7 @@ pub mod classify;
 pub mod report;
 pub mod run;
 
+pub use crate::backends::native_variants;
 pub use bounds::K_ROUNDING;
 pub use report::{Example, ParityReport, SetReport, StressRow, VariantStats, format_report};
-pub use run::{ParityOptions, Reference, config_label, native_variants, run};
+pub use run::{ParityOptions, Reference, run};

@@ -8,7 +8,8 @@ use std::sync::Arc;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::accel::{AccelConfig, Backend, Builder, Tracer, Traversal, build_tracer};
+use crate::accel::Tracer;
+use crate::backends::{AccelConfig, Backend, build_tracer, native_variants};
 use crate::geometry::{Hit, Primitives, Ray, TriangleTest};
 use crate::rays::{self, RayContext, RaySet, RayTag, SetKind};
 
@@ -32,49 +33,13 @@ impl Reference {
         match self {
             Reference::Embree => AccelConfig {
                 backend: Backend::Embree,
-                embree_quality: crate::accel::EmbreeQuality::High,
+                embree_quality: crate::backends::EmbreeQuality::High,
                 ..Default::default()
             },
             Reference::Brute => {
                 AccelConfig { backend: Backend::Brute, triangle_test: TriangleTest::Watertight, ..Default::default() }
             }
         }
-    }
-}
-
-/// Every native builder x traversal, with the watertight test; the default
-/// configuration (`sah/fast`) first.
-pub fn native_variants() -> Vec<AccelConfig> {
-    use clap::ValueEnum;
-    let default = AccelConfig { backend: Backend::Native, ..Default::default() };
-    let mut v = vec![default];
-    for &builder in Builder::value_variants() {
-        for &traversal in Traversal::value_variants() {
-            let cfg = AccelConfig { backend: Backend::Native, builder, traversal, ..Default::default() };
-            if cfg != default {
-                v.push(cfg);
-            }
-        }
-    }
-    v
-}
-
-/// A short label for a configuration (`native sah/fast`, `embree-high`, ...).
-pub fn config_label(cfg: &AccelConfig) -> String {
-    use clap::ValueEnum;
-    let name = |v: Option<clap::builder::PossibleValue>| v.map(|p| p.get_name().to_string()).unwrap_or_default();
-    let test = match cfg.triangle_test {
-        TriangleTest::Watertight => "",
-        TriangleTest::MollerTrumbore => " mt",
-    };
-    match cfg.backend {
-        Backend::Native => format!(
-            "native {}/{}{test}",
-            name(cfg.builder.to_possible_value()),
-            name(cfg.traversal.to_possible_value())
-        ),
-        Backend::Brute => format!("brute{test}"),
-        Backend::Embree => format!("embree-{}", name(cfg.embree_quality.to_possible_value())),
     }
 }
 
@@ -136,7 +101,7 @@ struct Built {
 /// Run parity over `ctx` with `opts`.
 pub fn run(ctx: &RayContext, opts: &ParityOptions) -> crate::Result<ParityReport> {
     let ref_cfg = opts.reference.config();
-    let ref_label = config_label(&ref_cfg);
+    let ref_label = ref_cfg.label();
     let build = |prims: &Arc<Primitives>, cfg: &AccelConfig| build_tracer(prims.clone(), cfg);
     let reference = build(&ctx.prims, &ref_cfg)?;
     let oracle_for = |p: Arc<Primitives>| build_tracer(p, &ref_cfg);
@@ -200,7 +165,7 @@ pub fn run(ctx: &RayContext, opts: &ParityOptions) -> crate::Result<ParityReport
                 let hits = trace_all(tracer.as_ref(), &s.rays);
                 let occ = occluded_all(tracer.as_ref(), s);
                 report.variants.push(compare(
-                    &config_label(cfg),
+                    &cfg.label(),
                     s,
                     Answers { hits: &hits, occluded: &occ },
                     Answers { hits: &ref_hits[..n], occluded: &ref_occ[..n] },
@@ -269,19 +234,7 @@ mod tests {
 
     #[test]
     fn brute_reference_agrees_with_itself() {
-        let p = [
-            Vec3::new(1.0, 1.0, 1.0),
-            Vec3::new(1.0, -1.0, -1.0),
-            Vec3::new(-1.0, 1.0, -1.0),
-            Vec3::new(-1.0, -1.0, 1.0),
-        ]
-        .map(|v| v * 0.5);
-        let f = [[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]];
-        let prims = Arc::new(Primitives {
-            triangles: f.iter().map(|t| Triangle { v: t.map(|i| p[i]) }).collect(),
-            spheres: vec![],
-        });
-        let ctx = RayContext::with_defaults(prims);
+        let ctx = RayContext::with_defaults(crate::rays::sets::tetra());
         let opts = ParityOptions {
             count: 3000,
             reference: Reference::Brute,

@@ -1,0 +1,149 @@
+//! The one module that names every tracer backend and builds it: brute force
+//! ([`crate::accel::BruteForce`]), rtdiff's BVH ([`crate::bvh`], configured
+//! by [`BvhConfig`]) and Intel Embree ([`crate::embree`], configured by
+//! [`EmbreeQuality`]). [`crate::accel`] holds only the [`Tracer`] interface
+//! and the brute-force oracle and imports no backend; each backend owns its
+//! configuration; this factory imports them all.
+
+use std::sync::Arc;
+
+use clap::ValueEnum;
+use serde::{Deserialize, Serialize};
+
+pub use crate::bvh::config::{Builder, BvhConfig, Traversal};
+pub use crate::embree::quality::EmbreeQuality;
+
+use crate::accel::{BruteForce, Tracer};
+use crate::error::Result;
+use crate::geometry::{Primitives, TriangleTest};
+
+/// Where hits come from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Backend {
+    /// rtdiff's own BVH.
+    #[default]
+    Native,
+    /// Every primitive against every ray (the oracle; also the reports' "BVH off").
+    Brute,
+    /// Intel Embree 4 (needs the `embree` cargo feature and scripts/setup-embree.sh).
+    Embree,
+}
+
+/// Full acceleration-structure configuration.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct AccelConfig {
+    /// Hit provider.
+    pub backend: Backend,
+    /// BVH builder (native backend).
+    pub builder: Builder,
+    /// BVH traversal (native backend).
+    pub traversal: Traversal,
+    /// Ray/triangle test (native and brute backends).
+    pub triangle_test: TriangleTest,
+    /// Maximum primitives per leaf for the `median` builder (the reports used 1).
+    pub leaf_size: usize,
+    /// Bin count for the `sah` builder.
+    pub bins: usize,
+    /// Build quality of the Embree backend (always built with the robust flag).
+    pub embree_quality: EmbreeQuality,
+}
+
+impl From<&AccelConfig> for BvhConfig {
+    fn from(c: &AccelConfig) -> Self {
+        BvhConfig {
+            builder: c.builder,
+            traversal: c.traversal,
+            triangle_test: c.triangle_test,
+            leaf_size: c.leaf_size,
+            bins: c.bins,
+        }
+    }
+}
+
+impl AccelConfig {
+    /// The BVH part of this configuration.
+    pub fn bvh(&self) -> BvhConfig {
+        self.into()
+    }
+
+    /// The one label of this configuration, used by every report and summary
+    /// (and by each tracer's [`Tracer::name`]): `bvh-sah/fast`, `brute`,
+    /// `embree-high`, with ` mt` for the Moller-Trumbore triangle test.
+    pub fn label(&self) -> String {
+        match self.backend {
+            Backend::Native => self.bvh().label(),
+            Backend::Brute => format!("brute{}", self.triangle_test.label_suffix()),
+            Backend::Embree => self.embree_quality.label(),
+        }
+    }
+}
+
+impl Default for AccelConfig {
+    fn default() -> Self {
+        Self {
+            backend: Backend::Native,
+            builder: Builder::Sah,
+            traversal: Traversal::Fast,
+            triangle_test: TriangleTest::Watertight,
+            leaf_size: 1,
+            bins: 16,
+            embree_quality: EmbreeQuality::High,
+        }
+    }
+}
+
+/// Build the tracer `cfg` asks for over `prims`.
+pub fn build_tracer(prims: Arc<Primitives>, cfg: &AccelConfig) -> Result<Box<dyn Tracer>> {
+    match cfg.backend {
+        Backend::Brute => Ok(Box::new(BruteForce::new(prims, cfg.triangle_test))),
+        Backend::Native => Ok(Box::new(crate::bvh::BvhTracer::new(&prims, cfg))),
+        #[cfg(feature = "embree")]
+        Backend::Embree => Ok(Box::new(crate::embree::EmbreeTracer::new(prims, cfg.embree_quality)?)),
+        #[cfg(not(feature = "embree"))]
+        Backend::Embree => Err(crate::error::Error::Invalid(
+            "this build has no Embree backend: run scripts/setup-embree.sh and build with --features embree".into(),
+        )),
+    }
+}
+
+/// Every native builder x traversal with the watertight test, the default
+/// configuration (`bvh-sah/fast`) first: the variant list of `parity`, `bench`
+/// and the tests.
+pub fn native_variants() -> Vec<AccelConfig> {
+    let default = AccelConfig { backend: Backend::Native, ..Default::default() };
+    let mut v = vec![default];
+    for &builder in Builder::value_variants() {
+        for &traversal in Traversal::value_variants() {
+            let cfg = AccelConfig { backend: Backend::Native, builder, traversal, ..Default::default() };
+            if cfg != default {
+                v.push(cfg);
+            }
+        }
+    }
+    v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_label_per_configuration() {
+        let labels: Vec<String> = native_variants().iter().map(AccelConfig::label).collect();
+        assert_eq!(labels[0], "bvh-sah/fast");
+        let mut unique = labels.clone();
+        unique.sort();
+        unique.dedup();
+        assert_eq!(unique.len(), labels.len());
+        let prims = Arc::new(Primitives::default());
+        for cfg in native_variants().into_iter().chain([
+            AccelConfig { backend: Backend::Brute, ..Default::default() },
+            AccelConfig { backend: Backend::Brute, triangle_test: TriangleTest::MollerTrumbore, ..Default::default() },
+            AccelConfig { triangle_test: TriangleTest::MollerTrumbore, ..Default::default() },
+        ]) {
+            assert_eq!(build_tracer(prims.clone(), &cfg).unwrap().name(), cfg.label());
+        }
+    }
+}
