@@ -312,6 +312,7 @@ def write_exr(path: str, img: np.ndarray):
     spec.channelnames = ("R", "G", "B")
     spec.attribute("compression", "zip")
     spec.attribute("openexr:lineOrder", "increasingY")
+    spec.attribute("DateTime", "")  # OpenEXR would stamp the time: no timestamp, byte-identical files
     out = oiio.ImageOutput.create(path)
     if out is None or not out.open(path, spec):
         raise OSError(f"{path}: cannot write EXR: {oiio.geterror()}")
