@@ -64,6 +64,22 @@ fn round_trip(py: &Path, scene: &str, size: u32, extra: &[&str]) -> (Image, Imag
     let tracer = accel::build_tracer(sc.prims.clone(), &sc.accel).unwrap();
     let ours = render(&sc, tracer.as_ref(), &RenderOptions { threads: None, quiet: true }).unwrap().image;
     let theirs = Image::read_exr(&exr).unwrap();
+    // The product's own path too: `rtdiff render` to EXR, then `rtdiff compare --json`.
+    let ours_exr = dir.join("rtdiff.exr");
+    let mut render_cmd = Command::new(env!("CARGO_BIN_EXE_rtdiff"));
+    render_cmd.arg("render").arg(&scene_path).arg("-o").arg(&ours_exr);
+    render_cmd.args(["--width", &s, "--height", &s, "--quiet"]).args(extra);
+    run(&mut render_cmd);
+    let mut compare = Command::new(env!("CARGO_BIN_EXE_rtdiff"));
+    compare.arg("compare").arg(&exr).arg(&ours_exr).arg("--json");
+    let report: serde_json::Value = serde_json::from_str(&run(&mut compare)).expect("rtdiff compare --json");
+    let frac = report["metrics"]["over_rel_threshold_fraction"].as_f64().unwrap();
+    println!(
+        "{scene}: rtdiff compare: {:.4}% over 1e-3 relative, PSNR {:.1} dB",
+        100.0 * frac,
+        report["metrics"]["psnr"]
+    );
+    assert!(frac <= 1e-3, "{scene}: rtdiff compare finds {:.4}% of pixels over 1e-3 relative", 100.0 * frac);
     let _ = std::fs::remove_dir_all(&dir);
     (theirs, ours, info)
 }
