@@ -8,4 +8,5 @@ pub mod debug;
 pub mod export;
 pub mod parity;
 pub mod render;
+pub mod report;
 pub mod trace;
