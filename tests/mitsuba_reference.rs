@@ -167,7 +167,8 @@ enum Class {
     TriangleEdge,
     /// Along the pixel's ray tree a light sample lies on opposite sides of the
     /// shading and the geometric normal, or within 1.5 degrees of the geometric
-    /// plane: the shadow ray leaves (almost) tangentially and each renderer's own
+    /// or the shading plane (where n.l ~ 0.003 turns a 1e-5 normal difference into
+    /// a 0.3% one): the shadow ray leaves (almost) tangentially and each renderer's own
     /// ray offset decides whether it re-hits the surface it starts on (the
     /// shading-normal terminator; Mitsuba's fixed offsets leak light there).
     ShadowTerminator,
@@ -240,7 +241,7 @@ fn has_terminator(scene: &Scene, n: &RayNode) -> bool {
         let bad = n.lights.iter().any(|l| {
             let dir = (Vec3::from(l.position) - p).normalize();
             let (g, s) = (ng.dot(dir), ns.dot(dir) * ng.dot(ns).signum());
-            g * s < 0.0 || g.abs() < 0.026
+            g * s < 0.0 || g.abs() < 0.026 || s.abs() < 0.026
         });
         if bad {
             return true;
