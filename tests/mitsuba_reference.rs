@@ -500,7 +500,7 @@ impl Tracer for LeakyShadows {
         self.calls.fetch_add(1, Ordering::Relaxed);
         let h = (ray.origin.x.to_bits() ^ ray.dir.y.to_bits().rotate_left(13) ^ ray.dir.z.to_bits().rotate_left(7))
             .wrapping_mul(0x9E37_79B9);
-        if h % 100 == 0 { false } else { self.inner.occluded(ray) }
+        if h.is_multiple_of(100) { false } else { self.inner.occluded(ray) }
     }
 }
 
