@@ -188,3 +188,21 @@ fn bloom_matches_openimageio() {
     assert!(!wrong.status.success(), "a 1% wrong bloom scale passed");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn export_bad_input_is_a_clear_error() {
+    let missing = Command::new(env!("CARGO_BIN_EXE_rtdiff"))
+        .args(["export", "no_such_scene.json", "-o", "/tmp/x"])
+        .output()
+        .unwrap();
+    assert!(!missing.status.success());
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("no_such_scene.json: file not found"));
+    let bad_dir = Command::new(env!("CARGO_BIN_EXE_rtdiff"))
+        .arg("export")
+        .arg(root().join("scenes/cube.json"))
+        .args(["-o", "/proc/rtdiff-cannot-write-here"])
+        .output()
+        .unwrap();
+    assert!(!bad_dir.status.success());
+    assert!(String::from_utf8_lossy(&bad_dir.stderr).contains("cannot create folder"));
+}
