@@ -165,7 +165,7 @@ fn bloom_matches_openimageio() {
             "--quiet",
         ]));
     }
-    let out = Command::new(py)
+    let out = Command::new(&py)
         .arg(root().join("scripts/mitsuba/check_bloom.py"))
         .args([before.as_os_str(), after.as_os_str()])
         .args(["0.6", "9", "0.7"])
@@ -178,7 +178,7 @@ fn bloom_matches_openimageio() {
     assert!(out.status.success(), "rtdiff's bloom differs from OpenImageIO's: {text}");
     // Power: the same check with the bloom scale 1% off must fail. (A threshold 1% off,
     // 0.606, selects the same pixels in this image and is not detectable here.)
-    let wrong = Command::new(py)
+    let wrong = Command::new(&py)
         .arg(root().join("scripts/mitsuba/check_bloom.py"))
         .args([before.as_os_str(), after.as_os_str()])
         .args(["0.6", "9", "0.707"])
