@@ -32,6 +32,7 @@ use rtdiff::scene::export::mitsuba::force_shading_model;
 use rtdiff::scene::file::LightSpec;
 use rtdiff::scene::{Overrides, Scene, SceneFile};
 use rtdiff::shading::ShadingModelKind;
+use rtdiff::verify::image::stats::{Moments, WelchOptions, WelchReport, welch_test};
 
 /// Relative tolerance of deterministic pixels (the 1e-3). Both renderers
 /// trace the same float32 triangles from the same camera and sum the same terms in
@@ -51,6 +52,12 @@ const MIN_AGREEING: f64 = 0.999;
 /// disagreeing pixels at 128x128 are `ShadowTerminator`, 17 `Silhouette`, 9
 /// `RecursivePath` (reflections re-entering the closed mesh at t ~ 1e-3).
 const KNOWN_BELOW: [(&str, f64); 2] = [("monkey.phong", 0.9961), ("monkey.physical", 0.9960)];
+/// Noisy references that do NOT pass the Welch test yet (reported as not done),
+/// with the most rejected pixels measured: their image-wide tests pass (no global
+/// bias: |z| < 1.2 per channel) but a few pixels of the cube's faces differ by 1-3%
+/// at t = 4-7 with Mitsuba's one-image variance ~3x rtdiff's; it persists with
+/// shadows off and is not decided yet. The test fails if it gets worse.
+const KNOWN_NOISY: [(&str, u64); 2] = [("cube.phong", 2), ("cube.physical", 10)];
 /// Independent rtdiff renders of a noisy scene (the reference has its own K in the manifest).
 const TEST_SEEDS: u32 = 8;
 /// False-alarm rate of the statistical check (Benjamini-Hochberg q).
@@ -63,7 +70,9 @@ fn root() -> PathBuf {
 /// One manifest entry.
 #[derive(Clone, Debug)]
 struct Reference {
+    name: String,
     scene: PathBuf,
+    features: Vec<(String, bool)>,
     model: ShadingModelKind,
     deterministic: bool,
     seeds: u32,
@@ -76,7 +85,7 @@ struct Reference {
 impl Reference {
     fn name(&self) -> String {
         let m = if self.model == ShadingModelKind::Phong { "phong" } else { "physical" };
-        format!("{}.{m}", self.scene.file_stem().unwrap().to_string_lossy())
+        format!("{}.{m}", self.name)
     }
 }
 
@@ -104,7 +113,14 @@ fn manifest() -> Vec<Reference> {
                 scene.display()
             );
             Reference {
+                name: e["name"].as_str().unwrap().to_string(),
                 scene,
+                features: e["features"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|f| rtdiff::cli::render::parse_feature(f.as_str().unwrap()).unwrap())
+                    .collect(),
                 model: if e["model"] == "phong" { ShadingModelKind::Phong } else { ShadingModelKind::Physical },
                 deterministic: e["deterministic"].as_bool().unwrap(),
                 seeds: e["seeds"].as_array().unwrap().len() as u32,
@@ -122,7 +138,13 @@ fn load(r: &Reference, seed: u64, tweak: &dyn Fn(&mut SceneFile)) -> Scene {
     let mut file = Scene::read_file(&r.scene).unwrap();
     force_shading_model(&mut file, r.model);
     tweak(&mut file);
-    let ov = Overrides { width: Some(r.width), height: Some(r.height), seed: Some(seed), ..Default::default() };
+    let ov = Overrides {
+        width: Some(r.width),
+        height: Some(r.height),
+        seed: Some(seed),
+        features: r.features.clone(),
+        ..Default::default()
+    };
     Scene::from_file_with(file, &r.scene, &ov).unwrap()
 }
 
@@ -146,7 +168,8 @@ enum Class {
     TriangleEdge,
     /// Along the pixel's ray tree a light sample lies on opposite sides of the
     /// shading and the geometric normal, or within 1.5 degrees of the geometric
-    /// plane: the shadow ray leaves (almost) tangentially and each renderer's own
+    /// or the shading plane (where n.l ~ 0.003 turns a 1e-5 normal difference into
+    /// a 0.3% one): the shadow ray leaves (almost) tangentially and each renderer's own
     /// ray offset decides whether it re-hits the surface it starts on (the
     /// shading-normal terminator; Mitsuba's fixed offsets leak light there).
     ShadowTerminator,
@@ -219,7 +242,7 @@ fn has_terminator(scene: &Scene, n: &RayNode) -> bool {
         let bad = n.lights.iter().any(|l| {
             let dir = (Vec3::from(l.position) - p).normalize();
             let (g, s) = (ng.dot(dir), ns.dot(dir) * ng.dot(ns).signum());
-            g * s < 0.0 || g.abs() < 0.026
+            g * s < 0.0 || g.abs() < 0.026 || s.abs() < 0.026
         });
         if bad {
             return true;
@@ -314,6 +337,50 @@ fn summary(e: &Exact) -> String {
     format!("{:.4}% agree (max rel {:.2e}), disagreeing {:?}", 100.0 * e.agreeing, e.max_rel, counts)
 }
 
+fn noisy_check(
+    r: &Reference,
+    tweak: &dyn Fn(&mut SceneFile),
+    wrap: &dyn Fn(Box<dyn Tracer>) -> Box<dyn Tracer>,
+) -> WelchReport {
+    let mean = Image::read_exr(&r.image).unwrap();
+    let var = Image::read_exr(r.variance.as_ref().unwrap()).unwrap();
+    let reference = Moments::from_mean_variance(&mean, &var, r.seeds).unwrap();
+    let imgs: Vec<Image> = (0..TEST_SEEDS).map(|k| render_with(&load(r, 1000 + k as u64, tweak), wrap)).collect();
+    let mut test = Moments::from_images(&imgs).unwrap();
+    let mut reference = reference;
+    numerically_black(&mut reference, &mut test);
+    welch_test(&reference, &test, &WelchOptions { fdr: FDR, ..Default::default() }).unwrap()
+}
+
+/// Below this, a pixel-channel is black on both sides whatever its noise (linear;
+/// 300x below the darkest non-zero 8-bit sRGB step, 3.0e-4).
+const BLACK: f64 = 1e-6;
+
+/// Pixel-channels whose mean and standard deviation are below [`BLACK`] on both
+/// sides become deterministic (variance 0), so the Welch test's exact tolerance
+/// (1e-5) judges them. Where an area light lies in the plane of a face (the cube's
+/// segment light runs along its top face), n.l is 0 in rtdiff and +-1e-8 in
+/// Mitsuba's float32 rounding: values of 1e-10 with a variance of 1e-20 would give
+/// t ~ 1000 for a difference no image can show.
+fn numerically_black(a: &mut Moments, b: &mut Moments) {
+    for i in 0..a.mean.len() {
+        for c in 0..3 {
+            let black = |m: &Moments| m.mean[i][c].abs() < BLACK && m.variance[i][c].sqrt() < BLACK;
+            if black(a) && black(b) {
+                a.variance[i][c] = 0.0;
+                b.variance[i][c] = 0.0;
+            }
+        }
+    }
+}
+
+fn welch_summary(w: &WelchReport) -> String {
+    format!(
+        "{} of {} hypotheses rejected ({} pixels), global z {:.2?}, bias^2 {:.3e}, variance {:.3e}, exact mismatches {}",
+        w.rejected, w.tests, w.rejected_pixels, w.global_z, w.bias2, w.variance, w.exact_mismatches
+    )
+}
+
 fn no_tweak(_: &mut SceneFile) {}
 
 #[test]
@@ -334,6 +401,16 @@ fn every_referenced_scene_agrees_with_mitsuba() {
             let min = KNOWN_BELOW.iter().find(|k| k.0 == r.name()).map_or(MIN_AGREEING, |k| k.1);
             if !e.passed_at(min) {
                 failures.push(format!("{}: {}", r.name(), summary(&e)));
+            }
+        } else {
+            let w = noisy_check(r, &no_tweak, &plain);
+            println!("{:<42} welch  {} [{:.2} s]", r.name(), welch_summary(&w), t0.elapsed().as_secs_f64());
+            let ok = match KNOWN_NOISY.iter().find(|k| k.0 == r.name()) {
+                Some(k) => !w.global_rejected && w.rejected_pixels <= k.1 && w.exact_mismatches == 0,
+                None => w.passed,
+            };
+            if !ok {
+                failures.push(format!("{}: {}", r.name(), welch_summary(&w)));
             }
         }
     }
@@ -424,12 +501,31 @@ impl Tracer for LeakyShadows {
         self.calls.fetch_add(1, Ordering::Relaxed);
         let h = (ray.origin.x.to_bits() ^ ray.dir.y.to_bits().rotate_left(13) ^ ray.dir.z.to_bits().rotate_left(7))
             .wrapping_mul(0x9E37_79B9);
-        if h % 100 == 0 { false } else { self.inner.occluded(ray) }
+        if h.is_multiple_of(100) { false } else { self.inner.occluded(ray) }
     }
 }
 
 fn leaky(t: Box<dyn Tracer>) -> Box<dyn Tracer> {
     Box::new(LeakyShadows { inner: t, calls: AtomicU64::new(0) })
+}
+
+#[test]
+fn noisy_check_catches_one_percent_light_bias() {
+    for name in ["cornell_box_parallelogram_light.physical", "cube.phong"] {
+        let r = reference(name);
+        let w = noisy_check(&r, &|f| scale_lights(f, 1.01), &plain);
+        println!("{name} light x1.01: {}", welch_summary(&w));
+        // The image-wide test must reject (the per-pixel tests alone cannot see 1% at this noise).
+        assert!(!w.passed && w.global_rejected, "{name}: a 1% brighter light passed: {}", welch_summary(&w));
+    }
+}
+
+#[test]
+fn noisy_check_catches_one_missed_shadow_ray_in_a_hundred() {
+    let r = reference("cornell_box_parallelogram_light.phong");
+    let w = noisy_check(&r, &no_tweak, &leaky);
+    println!("cornell_box_parallelogram_light.phong, 1 shadow ray in 100 missed: {}", welch_summary(&w));
+    assert!(!w.passed && w.global_rejected, "missing 1% of shadow rays passed: {}", welch_summary(&w));
 }
 
 #[test]

@@ -257,6 +257,7 @@ def render(mi, scene, cfg: dict, seed: int, passes: int | None = None) -> np.nda
     square = k * k == spp and spp > 1
     scalar = mi.variant().startswith("scalar")
     acc = np.zeros((H, W, 3), dtype=np.float64)
+    lens_on = cfg["plan"]["depth_of_field"]
     for p in range(passes):
         s = p // dof  # camera sample index (each camera sample gets `dof` lens samples)
         stream = (seed * 1_000_003 + p) & 0x7FFFFFFF
@@ -264,30 +265,21 @@ def render(mi, scene, cfg: dict, seed: int, passes: int | None = None) -> np.nda
             for y in range(H):
                 for x in range(W):
                     sampler.seed(stream * W * H + y * W + x, 1)
-                    acc[y, x] += _pixel(mi, sensor, integrator, scene, sampler, x, y, W, H, spp, s, k, square,
-                                        dof > 1 or cfg["plan"]["depth_of_field"])
+                    L = _camera_sample(mi, sensor, integrator, scene, sampler, x, y, W, H, spp, s, k, square, lens_on)
+                    acc[y, x] += np.array([L[0], L[1], L[2]], dtype=np.float64)
             continue
         sampler.seed(stream, W * H)
         idx = dr.arange(mi.UInt32, W * H)
         x, y = mi.Float(idx % W), mi.Float(idx // W)
-        if spp == 1:
-            ox, oy = mi.Float(0.5), mi.Float(0.5)
-        elif square:
-            j = sampler.next_2d()
-            ox, oy = ((s % k) + j.x) / k, ((s // k) + j.y) / k
-        else:
-            j = sampler.next_2d()
-            ox, oy = j.x, j.y
-        film = mi.Point2f((x + ox) / W, (y + oy) / H)
-        lens = sampler.next_2d() if cfg["plan"]["depth_of_field"] else mi.Point2f(0.5, 0.5)
-        ray, _ = sensor.sample_ray(0.0, 0.5, film, lens)
-        L, _, _ = integrator.sample(scene, sampler, ray)
+        L = _camera_sample(mi, sensor, integrator, scene, sampler, x, y, W, H, spp, s, k, square, lens_on)
         dr.eval(L)
         acc += np.stack([np.array(L[0]), np.array(L[1]), np.array(L[2])], axis=-1).reshape(H, W, 3)
     return (acc / passes).astype(np.float32)
 
 
-def _pixel(mi, sensor, integrator, scene, sampler, x, y, W, H, spp, s, k, square, lens_on):
+def _camera_sample(mi, sensor, integrator, scene, sampler, x, y, W, H, spp, s, k, square, lens_on):
+    """Radiance of camera sample `s` in pixel(s) (x, y): the centre for spp 1, stratum (s % k, s // k)
+    of a k x k jittered grid for a square spp, uniform otherwise; one lens sample when lens_on."""
     if spp == 1:
         ox, oy = 0.5, 0.5
     elif square:
@@ -299,7 +291,7 @@ def _pixel(mi, sensor, integrator, scene, sampler, x, y, W, H, spp, s, k, square
     lens = sampler.next_2d() if lens_on else mi.Point2f(0.5, 0.5)
     ray, _ = sensor.sample_ray(0.0, 0.5, mi.Point2f((x + ox) / W, (y + oy) / H), lens)
     L, _, _ = integrator.sample(scene, sampler, ray)
-    return np.array([L[0], L[1], L[2]], dtype=np.float64)
+    return L
 
 
 def write_exr(path: str, img: np.ndarray):
@@ -312,6 +304,7 @@ def write_exr(path: str, img: np.ndarray):
     spec.channelnames = ("R", "G", "B")
     spec.attribute("compression", "zip")
     spec.attribute("openexr:lineOrder", "increasingY")
+    spec.attribute("DateTime", "")  # OpenEXR would stamp the time: no timestamp, byte-identical files
     out = oiio.ImageOutput.create(path)
     if out is None or not out.open(path, spec):
         raise OSError(f"{path}: cannot write EXR: {oiio.geterror()}")

@@ -323,9 +323,9 @@ fn write_ply(scene: &Scene, triangles: &[usize], path: &Path) -> Result<()> {
     for &t in triangles {
         let tri = scene.prims.triangles[t].v;
         let sh = &scene.triangle_shading[t];
-        for k in 0..3 {
-            let uv = if sh.has_uvs { Vec2::new(sh.uvs[k].x, 1.0 - sh.uvs[k].y) } else { Vec2::ZERO };
-            for f in [tri[k].x, tri[k].y, tri[k].z, sh.normals[k].x, sh.normals[k].y, sh.normals[k].z, uv.x, uv.y] {
+        for ((p, n), uv) in tri.iter().zip(&sh.normals).zip(&sh.uvs) {
+            let uv = if sh.has_uvs { Vec2::new(uv.x, 1.0 - uv.y) } else { Vec2::ZERO };
+            for f in [p.x, p.y, p.z, n.x, n.y, n.z, uv.x, uv.y] {
                 out.extend_from_slice(&f.to_le_bytes());
             }
         }
