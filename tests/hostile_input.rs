@@ -11,7 +11,8 @@ use std::sync::Arc;
 
 use common::{temp_dir, write};
 use glam::Vec3;
-use rtdiff::accel::{AccelConfig, BruteForce, Tracer, build_tracer};
+use rtdiff::accel::{BruteForce, Tracer};
+use rtdiff::backends::{AccelConfig, build_tracer};
 use rtdiff::geometry::{Primitives, Ray, Triangle};
 use rtdiff::limits;
 use rtdiff::render::{RenderOptions, render};
@@ -103,7 +104,7 @@ fn bvh_survives_overflowing_box_areas_and_agrees_with_brute_force() {
     let prims = Arc::new(prims);
     let brute = BruteForce::new(prims.clone(), Default::default());
     for cfg in rtdiff::verify::hits::native_variants() {
-        let t = build_tracer(prims.clone(), &AccelConfig { backend: rtdiff::accel::Backend::Native, ..cfg })
+        let t = build_tracer(prims.clone(), &AccelConfig { backend: rtdiff::backends::Backend::Native, ..cfg })
             .expect("builds");
         for k in 0..50 {
             let r = Ray::new(Vec3::new(k as f32 * 1e35, k as f32 * 3e34, -1e30), Vec3::Z);

@@ -180,7 +180,7 @@ const REGR01_OVER_BOUND: u64 = 4;
 #[cfg(feature = "embree")]
 #[test]
 fn every_mesh_holds_hit_parity_against_embree() {
-    use rtdiff::accel::AccelConfig;
+    use rtdiff::backends::AccelConfig;
     use rtdiff::rays::SetKind;
     use rtdiff::verify::hits::{self as parity, ParityOptions, Reference};
     let dir = corpus();

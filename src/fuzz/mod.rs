@@ -18,7 +18,8 @@ use std::path::{Path, PathBuf};
 
 use clap::{Args, FromArgMatches};
 
-use crate::accel::{AccelConfig, Tracer, build_tracer};
+use crate::accel::Tracer;
+use crate::backends::{AccelConfig, build_tracer};
 use crate::error::{Error, Result};
 use crate::rng::{Pcg32, mix64};
 use crate::scene::{Overrides, Scene};
