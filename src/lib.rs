@@ -27,5 +27,6 @@ pub mod sampler;
 pub mod scene;
 pub mod shading;
 pub mod texture;
+pub mod verify;
 
 pub use error::{Error, Result};
