@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use rtdiff::accel::{EmbreeQuality, Tracer};
 use rtdiff::embree::{Device, EmbreeTracer};
-use rtdiff::harness::raysets::{SetKind, generate};
+use rtdiff::rays::{SetKind, generate};
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
@@ -21,7 +21,7 @@ fn main() -> rtdiff::Result<()> {
     let mut args = std::env::args().skip(1);
     let path = args.next().unwrap_or_else(|| "assets/dragon_87k.obj".into());
     let n: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(1_000_000);
-    let ctx = rtdiff::harness::load_context(std::path::Path::new(&path))?;
+    let ctx = rtdiff::rays::load_context(std::path::Path::new(&path))?;
     let device = Device::new("threads=1")?;
     println!("{path}: {} triangles, Embree {}, threads=1", ctx.prims.len(), device.version()?);
     let mut high = None;

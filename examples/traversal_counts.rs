@@ -6,15 +6,15 @@
 //! `cargo run --release --example traversal_counts -- [mesh.obj] [bins]`
 
 use rtdiff::accel::{AccelConfig, Builder};
-use rtdiff::bvh::rays::{Camera, incoherent_rays};
 use rtdiff::bvh::wide::TraversalCounts;
 use rtdiff::geometry::TriangleTest;
+use rtdiff::rays::{Camera, incoherent_rays};
 
 fn main() -> rtdiff::Result<()> {
     let mut args = std::env::args().skip(1);
     let path = args.next().unwrap_or_else(|| "assets/dragon_87k.obj".into());
     let bins = args.next().and_then(|s| s.parse().ok()).unwrap_or(16);
-    let prims = rtdiff::cli::bvh_stats::load_primitives(std::path::Path::new(&path), true)?;
+    let prims = rtdiff::rays::load_primitives(std::path::Path::new(&path), true)?;
     let cfg = AccelConfig { builder: Builder::Sah, bins, ..Default::default() };
     let bvh = rtdiff::bvh::build_wide(&prims, &cfg);
     println!("{path}: {} primitives, {} wide nodes", prims.len(), bvh.nodes.len());

@@ -38,7 +38,7 @@ fn dragon_res3_grazing_ray() {
     // of this thin triangle: the margin is 0.8 units, an ill-conditioned ray.
     assert!(truth.ill_conditioned() && truth.margin > 0.5, "margin {}", truth.margin);
     let mut configs = vec![AccelConfig { backend: Backend::Brute, ..Default::default() }];
-    configs.extend(rtdiff::harness::parity::native_variants());
+    configs.extend(rtdiff::verify::hits::native_variants());
     for cfg in &configs {
         let tracer = build_tracer(prims.clone(), cfg).unwrap();
         let h = tracer.intersect(&ray);

@@ -10,9 +10,9 @@ use std::sync::Arc;
 use common::{CORNELL_BOXES, CORNELL_ROOM_TRIS, cornell};
 use glam::{DVec3, Vec3};
 use rtdiff::accel::{AccelConfig, Traversal, build_tracer};
-use rtdiff::bvh::rays::{Camera, surface_point};
 use rtdiff::geometry::offset::{SpawnOffset, spawn_origin};
 use rtdiff::geometry::{Hit, Ray};
+use rtdiff::rays::{Camera, surface_point};
 
 /// Does the segment `p -> q` come within `margin` of the box `[lo, hi]`? (f64 slab test on the grown box)
 fn segment_near_box(p: DVec3, q: DVec3, lo: DVec3, hi: DVec3, margin: f64) -> bool {

@@ -148,7 +148,7 @@ fn packet_layouts_and_answers_match_single_rays() {
     assert_eq!((size_of::<ffi::RTCRayHit8>(), align_of::<ffi::RTCRayHit8>()), (672, 32));
     let prims = one_triangle_and_sphere();
     let t = EmbreeTracer::new(prims, EmbreeQuality::Medium).unwrap();
-    let mut rng = rtdiff::harness::raysets::Rng::new(5);
+    let mut rng = rtdiff::rays::Rng::new(5);
     let bounds = rtdiff::geometry::Aabb::new(Vec3::new(-1.0, -1.0, -1.0), Vec3::new(7.0, 2.0, 2.0));
     let rays: Vec<Ray> = (0..4003).map(|_| Ray::new(rng.in_box(&bounds), rng.unit_vector())).collect();
     let mut hits = 0;
@@ -158,7 +158,7 @@ fn packet_layouts_and_answers_match_single_rays() {
         for (k, r) in chunk.iter().enumerate() {
             // Same primitive; the packet kernels are different SIMD code
             // (other FMA contractions, other operation order on spheres), so t
-            // may differ by rounding: at most the bound of harness::parity,
+            // may differ by rounding: at most the bound of verify::hits::bounds,
             // K u (|o| + |p|) / (|d| cos), K = 32, with cos the incidence on
             // the hit surface; (u, v) of spheres follow the hit point.
             let h1 = t.intersect(r);

@@ -20,7 +20,6 @@ pub mod collapse;
 pub mod node;
 pub mod packet;
 pub mod prims;
-pub mod rays;
 pub mod slab;
 pub mod stats;
 pub mod traverse_basic;

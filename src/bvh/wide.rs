@@ -641,7 +641,7 @@ mod tests {
         assert!(shallow.levels * WIDTH <= SHALLOW_STACK);
         let mut deep = shallow.clone();
         deep.levels = SHALLOW_STACK; // forces the 1024-entry stack
-        let rays = super::super::rays::incoherent_rays(&prims.world_bounds(), 20_000, 7);
+        let rays = crate::rays::incoherent_rays(&prims.world_bounds(), 20_000, 7);
         let mut hits = 0;
         for r in &rays {
             let a = shallow.intersect(r, TriangleTest::Watertight);

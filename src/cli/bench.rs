@@ -1,20 +1,12 @@
-//! `rtdiff bench`: build time per builder and traversal throughput per
-//! tracer on primary, incoherent and shadow ray sets, single-threaded and
-//! with all threads. Tracers come from [`crate::accel::build_tracer`], so
-//! Embree rows appear when the crate is built with `--features embree`.
+//! `rtdiff bench`: parses the arguments, runs [`crate::perf::bench`] or
+//! [`crate::perf::race`] and prints their reports as tables.
 
 use std::path::PathBuf;
-use std::sync::Arc;
-use std::time::Instant;
 
-use glam::Vec3;
-use rayon::prelude::*;
-
-use crate::accel::{AccelConfig, Backend, Builder, EmbreeQuality, Tracer, Traversal, build_tracer};
-use crate::bvh::rays::{Camera, incoherent_rays, shadow_rays};
+use crate::accel::{AccelConfig, Builder, Traversal, build_tracer};
 use crate::error::{Error, Result};
-use crate::geometry::offset::SpawnOffset;
-use crate::geometry::{Hit, Primitives, Ray};
+use crate::perf::bench::{BenchOptions, BenchReport, LIGHT, RaySets};
+use crate::perf::race::RaceReport;
 
 /// Arguments of `rtdiff bench`.
 #[derive(clap::Args, Debug)]
@@ -53,130 +45,29 @@ pub struct BenchArgs {
     pub race: Option<usize>,
 }
 
-/// The benchmark's point light.
-pub const LIGHT: Vec3 = Vec3::new(-1.0, 1.0, -1.0);
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
-/// Ray sets of one scene.
-struct RaySets {
-    primary: Vec<Ray>,
-    incoherent: Vec<Ray>,
-    shadow: Vec<Ray>,
-}
-
-/// Result of one tracer on one ray set: closest hits or occlusion flags.
-#[derive(PartialEq)]
-enum Answers {
-    Closest(Vec<Option<Hit>>),
-    Any(Vec<bool>),
-}
-
-fn trace(tracer: &dyn Tracer, rays: &[Ray], any: bool, parallel: bool) -> Answers {
-    match (any, parallel) {
-        (false, false) => Answers::Closest(rays.iter().map(|r| tracer.intersect(r)).collect()),
-        (false, true) => Answers::Closest(rays.par_iter().with_min_len(256).map(|r| tracer.intersect(r)).collect()),
-        (true, false) => Answers::Any(rays.iter().map(|r| tracer.occluded(r)).collect()),
-        (true, true) => Answers::Any(rays.par_iter().with_min_len(256).map(|r| tracer.occluded(r)).collect()),
-    }
-}
-
-/// Disagreements with the reference answers: different hit/miss or primitive.
-fn disagreements(a: &Answers, b: &Answers) -> usize {
-    match (a, b) {
-        (Answers::Closest(a), Answers::Closest(b)) => {
-            a.iter().zip(b).filter(|(x, y)| x.map(|h| h.prim) != y.map(|h| h.prim)).count()
-        }
-        (Answers::Any(a), Answers::Any(b)) => a.iter().zip(b).filter(|(x, y)| x != y).count(),
-        _ => usize::MAX,
-    }
-}
-
-/// CPU time consumed by the calling thread, in seconds (unaffected by other
-/// processes competing for the cores of a shared machine).
-#[cfg(unix)]
-fn thread_cpu_seconds() -> Option<f64> {
-    let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
-    // SAFETY: ts is a valid, writable timespec.
-    let rc = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
-    (rc == 0).then_some(ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9)
-}
-
-#[cfg(not(unix))]
-fn thread_cpu_seconds() -> Option<f64> {
-    None
-}
-
-/// A stopwatch: the thread's CPU time for single-threaded work (when the
-/// platform has it), wall-clock time otherwise.
-pub(crate) struct Clock {
-    /// Measure CPU time of the calling thread instead of wall-clock time.
-    pub(crate) cpu: bool,
-}
-
-impl Clock {
-    pub(crate) fn now(&self) -> (Instant, Option<f64>) {
-        (Instant::now(), if self.cpu { thread_cpu_seconds() } else { None })
-    }
-
-    pub(crate) fn since(&self, start: (Instant, Option<f64>)) -> f64 {
-        match (start.1, if self.cpu { thread_cpu_seconds() } else { None }) {
-            (Some(a), Some(b)) => b - a,
-            _ => start.0.elapsed().as_secs_f64(),
+impl BenchArgs {
+    /// The library options these arguments ask for.
+    pub fn options(&self) -> BenchOptions {
+        let d = BenchOptions::default();
+        BenchOptions {
+            runs: self.runs,
+            size: self.size,
+            incoherent: self.incoherent,
+            builders: if self.builder.is_empty() { d.builders } else { self.builder.clone() },
+            traversals: if self.traversal.is_empty() { d.traversals } else { self.traversal.clone() },
+            single_only: self.single_only,
+            leaf_size: self.leaf_size,
+            bins: self.bins,
         }
     }
-}
-
-/// Time `f` `runs` times; median seconds and the first result. With
-/// `cpu_time`, measures the calling thread's CPU time (single-threaded work only).
-fn timed<T>(runs: usize, cpu_time: bool, mut f: impl FnMut() -> T) -> (f64, T) {
-    let clock = Clock { cpu: cpu_time };
-    let mut times = Vec::with_capacity(runs);
-    let start = clock.now();
-    let first = f();
-    times.push(clock.since(start));
-    for _ in 1..runs {
-        let start = clock.now();
-        std::hint::black_box(f());
-        times.push(clock.since(start));
-    }
-    (median(times), first)
-}
-
-pub(crate) fn single_pool() -> Result<rayon::ThreadPool> {
-    rayon::ThreadPoolBuilder::new().num_threads(1).build().map_err(|e| Error::Invalid(e.to_string()))
-}
-
-/// Embree builds on one device made with `"threads=1"` and kept alive (so no
-/// thread-pool start-up is timed): wall clock and CPU time of the calling
-/// thread, which does all the work with one thread.
-#[cfg(feature = "embree")]
-fn embree_single_thread_builds(prims: &Arc<Primitives>, runs: usize) -> Result<()> {
-    use crate::embree::{Device, EmbreeTracer};
-    let device = Device::new("threads=1")?;
-    for q in [EmbreeQuality::Low, EmbreeQuality::Medium, EmbreeQuality::High] {
-        let (cpu, r) = timed(runs, true, || EmbreeTracer::with_device(&device, prims.clone(), q).map(|_| ()));
-        r?;
-        let (wall, _) = timed(runs, false, || EmbreeTracer::with_device(&device, prims.clone(), q).map(|_| ()));
-        let name = format!("embree {} (threads=1; wall)", value_name(&q));
-        println!("{name:<32} {:>12.2} {:>12.2}", cpu * 1e3, wall * 1e3);
-    }
-    Ok(())
 }
 
 /// Run `rtdiff bench`.
 pub fn run(args: &BenchArgs) -> Result<()> {
-    if args.runs == 0 || args.size == 0 {
-        return Err(Error::Invalid("--runs and --size must be positive".into()));
-    }
+    let opts = args.options();
+    opts.validate()?;
     if args.race == Some(0) {
         return Err(Error::Invalid("--race needs at least one round".into()));
-    }
-    if args.bins < 2 {
-        return Err(Error::Invalid(format!("--bins must be at least 2 (got {})", args.bins)));
     }
     let scenes = if args.scenes.is_empty() {
         let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets");
@@ -189,169 +80,104 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         args.scenes.clone()
     };
     for s in &scenes {
-        let prims = super::bvh_stats::load_primitives(s, true)?;
+        let prims = crate::rays::load_primitives(s, true)?;
         println!("\n## {} ({} primitives, {} rayon threads)", s.display(), prims.len(), rayon::current_num_threads());
-        bench_scene(args, prims)?;
+        if let Some(rounds) = args.race {
+            let reference = build_tracer(prims.clone(), &AccelConfig::default())?;
+            let sets = RaySets::new(&prims, opts.size, opts.incoherent, reference.as_ref());
+            let report = crate::perf::race::race(&prims, &sets.list(), rounds)?;
+            print_race(&report);
+        } else {
+            print_bench(&crate::perf::bench::run(&s.display().to_string(), prims, &opts)?);
+        }
     }
     Ok(())
 }
 
-fn bench_scene(args: &BenchArgs, prims: Arc<Primitives>) -> Result<()> {
-    if let Some(rounds) = args.race {
-        return race_scene(args, &prims, rounds);
-    }
-    let one = single_pool()?;
-    let builders = if args.builder.is_empty() {
-        vec![Builder::Median, Builder::SahVolume, Builder::Sah]
-    } else {
-        args.builder.clone()
-    };
-    let traversals = if args.traversal.is_empty() {
-        vec![
-            Traversal::Basic,
-            Traversal::PriorityQueue,
-            Traversal::SortedVector,
-            Traversal::NthElement,
-            Traversal::Fast,
-        ]
-    } else {
-        args.traversal.clone()
-    };
-
-    // Build times.
+/// Print a benchmark report as the `rtdiff bench` tables.
+pub fn print_bench(r: &BenchReport) {
     println!(
         "\n### Build (median of {} runs; ms; 1 thread = CPU time of the building thread, all threads = wall clock)",
-        args.runs
+        r.runs
     );
     println!("{:<32} {:>12} {:>12}", "structure", "1 thread", "all threads");
-    let mut configs: Vec<AccelConfig> = Vec::new();
-    for &builder in &builders {
-        for (label, traversal) in [("binary", Traversal::Basic), ("binary + 8-wide", Traversal::Fast)] {
-            let cfg =
-                AccelConfig { builder, traversal, leaf_size: args.leaf_size, bins: args.bins, ..Default::default() };
-            let (t1, _) = one.install(|| timed(args.runs, true, || build_tracer(prims.clone(), &cfg).map(|_| ())));
-            let (tn, _) = timed(args.runs, false, || build_tracer(prims.clone(), &cfg).map(|_| ()));
-            let name = format!("bvh-{} {label}", value_name(&builder));
-            println!("{name:<32} {:>12.2} {:>12.2}", t1 * 1e3, tn * 1e3);
-        }
-        for &traversal in &traversals {
-            configs.push(AccelConfig {
-                builder,
-                traversal,
-                leaf_size: args.leaf_size,
-                bins: args.bins,
-                ..Default::default()
-            });
-        }
+    let ms = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.2}"));
+    for b in &r.builds {
+        println!("{:<32} {:>12} {:>12}", b.structure, ms(b.single_thread_ms), ms(b.all_threads_ms));
     }
-    for q in [EmbreeQuality::Low, EmbreeQuality::Medium, EmbreeQuality::High] {
-        let cfg = AccelConfig { backend: Backend::Embree, embree_quality: q, ..Default::default() };
-        match timed(args.runs, false, || build_tracer(prims.clone(), &cfg).map(|_| ())) {
-            (t, Ok(())) => {
-                println!("{:<32} {:>12} {:>12.2}", format!("embree {}", value_name(&q)), "-", t * 1e3);
-                configs.push(cfg);
-            }
-            (_, Err(e)) => {
-                println!("embree not built ({e})");
-                break;
-            }
-        }
+    if let Some(e) = &r.embree_unavailable {
+        println!("embree not built ({e})");
     }
-    #[cfg(feature = "embree")]
-    embree_single_thread_builds(&prims, args.runs)?;
-
-    // Ray sets: shadow rays start at the primary hits of the reference tracer.
-    let reference = build_tracer(prims.clone(), &AccelConfig::default())?;
-    let (sets, n_hit) = ray_sets(args, &prims, reference.as_ref());
     println!(
         "\nrays: primary {} ({} hit), incoherent {}, shadow {} (towards {LIGHT})",
-        sets.primary.len(),
-        n_hit,
-        sets.incoherent.len(),
-        sets.shadow.len()
+        r.rays.primary, r.rays.primary_hits, r.rays.incoherent, r.rays.shadow
     );
-    let set_list: [(&str, &[Ray], bool); 3] =
-        [("primary", &sets.primary, false), ("incoherent", &sets.incoherent, false), ("shadow", &sets.shadow, true)];
-    let refs: Vec<Answers> = set_list.iter().map(|(_, r, any)| trace(reference.as_ref(), r, *any, true)).collect();
-
-    let modes: &[bool] = if args.single_only { &[false] } else { &[false, true] };
-    for &parallel in modes {
+    for t in &r.traversal {
         println!(
             "\n### Traversal, {} (Mrays/s, median of {} runs; x = ratio to the same builder's basic; diff = rays whose hit primitive differs from bvh-sah/fast)",
-            if parallel {
-                format!("{} threads, wall clock", rayon::current_num_threads())
+            if t.all_threads {
+                format!("{} threads, wall clock", t.threads)
             } else {
                 "1 thread, CPU time of the tracing thread".into()
             },
-            args.runs
+            r.runs
         );
         println!(
             "{:<32} {:>9} {:>7} {:>9} {:>7} {:>9} {:>7} {:>6}",
             "tracer", "primary", "x", "incoh.", "x", "shadow", "x", "diff"
         );
-        let mut basic: Vec<(Builder, [f64; 3])> = Vec::new();
-        for cfg in &configs {
-            let tracer = build_tracer(prims.clone(), cfg)?;
-            let mut mr = [0.0; 3];
-            let mut diff = 0;
-            for (k, (_, rays, any)) in set_list.iter().enumerate() {
-                let (t, ans) = if parallel {
-                    timed(args.runs, false, || trace(tracer.as_ref(), rays, *any, true))
-                } else {
-                    one.install(|| timed(args.runs, true, || trace(tracer.as_ref(), rays, *any, false)))
-                };
-                mr[k] = rays.len() as f64 / t / 1e6;
-                diff += disagreements(&ans, &refs[k]);
-            }
-            if cfg.backend == Backend::Native && cfg.traversal == Traversal::Basic {
-                basic.push((cfg.builder, mr));
-            }
-            let base = basic.iter().find(|(b, _)| *b == cfg.builder && cfg.backend == Backend::Native).map(|b| b.1);
-            let ratio = |k: usize| base.map_or("-".to_string(), |b| format!("{:.2}", mr[k] / b[k]));
+        for row in &t.rows {
+            let ratio = |k: usize| row.ratio_to_basic.map_or("-".to_string(), |b| format!("{:.2}", b[k]));
+            let mr = row.mrays_per_s;
             println!(
                 "{:<32} {:>9.2} {:>7} {:>9.2} {:>7} {:>9.2} {:>7} {:>6}",
-                tracer.name(),
+                row.tracer,
                 mr[0],
                 ratio(0),
                 mr[1],
                 ratio(1),
                 mr[2],
                 ratio(2),
-                diff
+                row.differences
             );
         }
     }
-    Ok(())
 }
 
-/// The three ray sets of a scene: primary rays from the default camera,
-/// incoherent rays, and shadow rays from the primary hits towards [`LIGHT`].
-fn ray_sets(args: &BenchArgs, prims: &Arc<Primitives>, reference: &dyn Tracer) -> (RaySets, usize) {
-    let primary = Camera::scene_default().rays(args.size, args.size);
-    let hits: Vec<Option<Hit>> = primary.par_iter().map(|r| reference.intersect(r)).collect();
-    let shadow = shadow_rays(prims, &primary, &hits, LIGHT, SpawnOffset::Robust);
-    let n_hit = hits.iter().filter(|h| h.is_some()).count();
-    (RaySets { primary, incoherent: incoherent_rays(&prims.world_bounds(), args.incoherent, 2024), shadow }, n_hit)
-}
-
-#[cfg(feature = "embree")]
-fn race_scene(args: &BenchArgs, prims: &Arc<Primitives>, rounds: usize) -> Result<()> {
-    let reference = build_tracer(prims.clone(), &AccelConfig::default())?;
-    let (sets, _) = ray_sets(args, prims, reference.as_ref());
-    super::race::race(
-        prims,
-        &[("primary", &sets.primary, false), ("incoherent", &sets.incoherent, false), ("shadow", &sets.shadow, true)],
-        rounds,
-    )
-}
-
-#[cfg(not(feature = "embree"))]
-fn race_scene(_: &BenchArgs, _: &Arc<Primitives>, _: usize) -> Result<()> {
-    Err(Error::Invalid(
-        "--race needs the Embree backend: run scripts/setup-embree.sh and build with --features embree".into(),
-    ))
-}
-
-fn value_name<T: clap::ValueEnum>(v: &T) -> String {
-    v.to_possible_value().map_or_else(String::new, |p| p.get_name().to_string())
+/// Print a race report as the `rtdiff bench --race` table.
+pub fn print_race(r: &RaceReport) {
+    for (set, a, b) in &r.hit_count_differences {
+        eprintln!("note: {} hits differ on {set}: rtdiff {a}, Embree {b}", a.abs_diff(*b));
+    }
+    println!(
+        "\n### rtdiff sah/fast against Embree MEDIUM (rtcIntersect1 / rtcOccluded1), 1 thread, {} interleaved rounds",
+        r.rounds
+    );
+    println!("ratio = Embree time / rtdiff time in the same round (above 1: rtdiff faster); CPU time of the thread");
+    println!(
+        "{:<12} {:>16} {:>16} {:>7} {:>7} {:>7} {:>7}",
+        "", "rtdiff (median)", "Embree (median)", "ratio", "q1", "q3", "wins"
+    );
+    for c in &r.contests {
+        let s = c.summary();
+        let (a, b) = if c.rays > 0 {
+            (
+                format!("{:.2} Mrays/s", c.rays as f64 / s.rtdiff_s / 1e6),
+                format!("{:.2} Mrays/s", c.rays as f64 / s.embree_s / 1e6),
+            )
+        } else {
+            (format!("{:.2} ms", s.rtdiff_s * 1e3), format!("{:.2} ms", s.embree_s * 1e3))
+        };
+        println!(
+            "{:<12} {:>16} {:>16} {:>7.3} {:>7.3} {:>7.3} {:>5}/{}",
+            c.name,
+            a,
+            b,
+            s.ratio,
+            s.q1,
+            s.q3,
+            s.wins,
+            c.times.len()
+        );
+    }
 }

@@ -1,13 +1,11 @@
 //! `rtdiff bvh-stats SCENE [--builder ...] [--json]`: build the BVH with each
 //! builder and print its statistics.
 
-use std::path::{Path, PathBuf};
-use std::sync::Arc;
+use std::path::PathBuf;
 
 use crate::accel::{AccelConfig, Builder, Traversal};
 use crate::bvh::BvhStats;
 use crate::error::{Error, Result};
-use crate::geometry::Primitives;
 
 /// Arguments of `rtdiff bvh-stats`.
 #[derive(clap::Args, Debug)]
@@ -28,28 +26,7 @@ pub struct BvhStatsArgs {
     pub json: bool,
 }
 
-/// Load the primitives of `path`: an `.obj` mesh directly, anything else as a scene file.
-/// With `normalize`, an OBJ mesh is centred on its vertex mean and scaled into the unit sphere.
-pub fn load_primitives(path: &Path, normalize: bool) -> Result<Arc<Primitives>> {
-    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-    match ext.as_deref() {
-        Some("obj") => {
-            let mut mesh = crate::mesh::load_obj(path)?;
-            if normalize {
-                crate::bvh::rays::normalize_mesh(&mut mesh);
-            }
-            if mesh.indices.is_empty() {
-                return Err(Error::file(path, "the mesh has no (non-degenerate) triangles"));
-            }
-            Ok(Arc::new(mesh.to_primitives()))
-        }
-        _ => load_scene_primitives(path),
-    }
-}
-
-fn load_scene_primitives(path: &Path) -> Result<Arc<Primitives>> {
-    Ok(crate::scene::Scene::load(path)?.prims)
-}
+pub use crate::rays::load_primitives;
 
 /// Run `rtdiff bvh-stats`.
 pub fn run(args: &BvhStatsArgs) -> Result<()> {

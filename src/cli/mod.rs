@@ -5,7 +5,5 @@ pub mod bench;
 pub mod bvh_stats;
 pub mod debug;
 pub mod parity;
-#[cfg(feature = "embree")]
-mod race;
 pub mod render;
 pub mod trace;

@@ -4,8 +4,8 @@
 use std::path::PathBuf;
 
 use crate::error::Result;
-use crate::harness::parity::{self, ParityOptions, Reference};
-use crate::harness::raysets::SetKind;
+use crate::rays::SetKind;
+use crate::verify::hits::{self as parity, ParityOptions, Reference};
 
 /// `--rays`: one set, or `None` for `all` (every set plus the numerical stress report).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -61,7 +61,7 @@ pub struct ParityArgs {
 
 /// Run `rtdiff parity`.
 pub fn run(args: &ParityArgs) -> Result<()> {
-    let ctx = crate::harness::load_context(&args.scene)?;
+    let ctx = crate::rays::load_context(&args.scene)?;
     let sets = match args.rays.0 {
         None => SetKind::ALL.to_vec(),
         Some(set) => vec![set],

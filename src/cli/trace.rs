@@ -70,7 +70,7 @@ pub fn parse_rays(path: &Path, text: &str) -> Result<Vec<Ray>> {
 
 /// Run `rtdiff trace`.
 pub fn run(args: &TraceArgs) -> Result<()> {
-    let ctx = crate::harness::load_context(&args.scene)?;
+    let ctx = crate::rays::load_context(&args.scene)?;
     let text = std::fs::read_to_string(&args.rays).map_err(|e| Error::io(&args.rays, &e))?;
     let rays = parse_rays(&args.rays, &text)?;
     let cfg = AccelConfig { backend: args.tracer, ..Default::default() };

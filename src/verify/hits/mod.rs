@@ -1,4 +1,16 @@
-//! Hit parity: native tracers against Embree, brute force and the exact arbiter.
+//! Hit parity against an independent oracle (Embree or brute force): the
+//! error bounds two correct tracers may differ by ([`bounds`]), the
+//! classification of every disagreement ([`classify`]), the exact arbiter that
+//! decides who is right ([`arbiter`], on [`exact`] arithmetic), the run over
+//! the ray sets of [`crate::rays`] ([`run`]) and its typed report ([`report`]).
 
 pub mod arbiter;
+pub mod bounds;
+pub mod classify;
 pub mod exact;
+pub mod report;
+pub mod run;
+
+pub use bounds::K_ROUNDING;
+pub use report::{Example, ParityReport, SetReport, StressRow, VariantStats, format_report};
+pub use run::{ParityOptions, Reference, config_label, native_variants, run};

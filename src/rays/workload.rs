@@ -23,6 +23,21 @@ pub fn normalize_mesh(mesh: &mut Mesh) {
     mesh.map_positions(|p| (p - c) * s);
 }
 
+/// Translate and scale a mesh's vertices so that their mean is at the origin
+/// and the farthest vertex at distance 1 (the default camera's framing).
+pub fn normalise_to_unit_sphere(positions: &mut [Vec3]) {
+    if positions.is_empty() {
+        return;
+    }
+    let sum = positions.iter().fold(glam::DVec3::ZERO, |a, p| a + p.as_dvec3());
+    let c = sum / positions.len() as f64;
+    let r = positions.iter().map(|p| (p.as_dvec3() - c).length()).fold(0.0, f64::max);
+    let s = if r > 0.0 { 1.0 / r } else { 1.0 };
+    for p in positions {
+        *p = ((p.as_dvec3() - c) * s).as_vec3();
+    }
+}
+
 /// A pinhole camera.
 #[derive(Clone, Copy, Debug)]
 pub struct Camera {

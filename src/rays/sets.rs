@@ -7,7 +7,6 @@
 //! the hits of the tracer given as oracle. Ray `i` of a set can be replayed
 //! from `(set, seed, count, i)`.
 
-use std::collections::HashMap;
 use std::sync::Arc;
 
 use glam::{DVec3, Vec3};
@@ -16,166 +15,7 @@ use crate::accel::Tracer;
 use crate::geometry::offset::{offset_origin, sphere_point_error, triangle_point_error};
 use crate::geometry::{Aabb, Hit, Primitives, Ray};
 
-/// The harness's random numbers: the project's PCG32 ([`crate::rng::Pcg32`],
-/// one stream per ray set) with the few extra draws ray generation needs.
-#[derive(Clone, Debug)]
-pub struct Rng(crate::rng::Pcg32);
-
-impl Rng {
-    /// A generator with the given seed (stream 0).
-    pub fn new(seed: u64) -> Self {
-        Self(crate::rng::Pcg32::new(seed, 0))
-    }
-
-    /// A generator for stream `stream` of `seed` (independent sub-sequences per set).
-    pub fn stream(seed: u64, stream: u64) -> Self {
-        Self(crate::rng::Pcg32::new(seed, stream))
-    }
-
-    /// Next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        ((self.0.next_u32() as u64) << 32) | self.0.next_u32() as u64
-    }
-
-    /// Uniform in `[0, 1)` with 24 random bits.
-    pub fn f32(&mut self) -> f32 {
-        self.0.next_f32()
-    }
-
-    /// Uniform in `[0, 1)` with 53 random bits.
-    pub fn f64(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-
-    /// Uniform integer in `0..n` (`0 < n < 2^32`).
-    pub fn below(&mut self, n: usize) -> usize {
-        self.0.below(n as u32) as usize
-    }
-
-    /// Uniform direction on the unit sphere.
-    pub fn unit_vector(&mut self) -> Vec3 {
-        let z = 1.0 - 2.0 * self.f64();
-        let phi = std::f64::consts::TAU * self.f64();
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32)
-    }
-
-    /// Uniform point in `b`.
-    pub fn in_box(&mut self, b: &Aabb) -> Vec3 {
-        let e = b.extent();
-        b.min + Vec3::new(self.f32() * e.x, self.f32() * e.y, self.f32() * e.z)
-    }
-}
-
-/// A pinhole camera (vertical field of view, square pixels), used until a
-/// scene file supplies one.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PinholeCamera {
-    /// Eye position.
-    pub eye: Vec3,
-    /// Point looked at.
-    pub target: Vec3,
-    /// Up hint.
-    pub up: Vec3,
-    /// Vertical field of view in degrees.
-    pub fov_y_deg: f32,
-    /// Image width in pixels.
-    pub width: u32,
-    /// Image height in pixels.
-    pub height: u32,
-}
-
-impl Default for PinholeCamera {
-    /// The project's default view of a mesh normalised to the unit sphere.
-    fn default() -> Self {
-        Self {
-            eye: Vec3::new(-0.964, 1.026, -2.649),
-            target: Vec3::ZERO,
-            up: Vec3::Y,
-            fov_y_deg: 50.0,
-            width: 800,
-            height: 800,
-        }
-    }
-}
-
-impl PinholeCamera {
-    /// The ray through continuous pixel position `(px, py)`, `(0, 0)` being
-    /// the top-left corner of the image (pixel centres at `+0.5`).
-    pub fn ray(&self, px: f32, py: f32) -> Ray {
-        let fwd = (self.target - self.eye).normalize();
-        let right = fwd.cross(self.up).normalize();
-        let up2 = right.cross(fwd);
-        let tan = (0.5 * self.fov_y_deg.to_radians()).tan();
-        let aspect = self.width as f32 / self.height as f32;
-        let ndc_x = 2.0 * px / self.width as f32 - 1.0;
-        let ndc_y = 1.0 - 2.0 * py / self.height as f32;
-        let d = (fwd + ndc_x * tan * aspect * right + ndc_y * tan * up2).normalize();
-        Ray::new(self.eye, d)
-    }
-}
-
-/// Camera rays by continuous pixel position.
-pub type CameraFn = Arc<dyn Fn(f32, f32) -> Ray + Send + Sync>;
-/// A light's sample point at `(u, v)` in `[0, 1)^2` (a point light ignores both).
-pub type LightFn = Arc<dyn Fn(f32, f32) -> Vec3 + Send + Sync>;
-
-/// What ray sets are generated from: the primitives, a camera and lights.
-#[derive(Clone)]
-pub struct RayContext {
-    /// The scene's primitives.
-    pub prims: Arc<Primitives>,
-    /// Camera rays.
-    pub camera: CameraFn,
-    /// Image size `(width, height)` in pixels.
-    pub image: (u32, u32),
-    /// Light sample points (shadow rays go to these).
-    pub lights: Vec<LightFn>,
-}
-
-impl RayContext {
-    /// The default camera and point light `(-1, 1, -1)` around `prims`
-    /// (meant for meshes normalised to the unit sphere).
-    pub fn with_defaults(prims: Arc<Primitives>) -> Self {
-        let cam = PinholeCamera::default();
-        let light = Vec3::new(-1.0, 1.0, -1.0);
-        Self {
-            prims,
-            camera: Arc::new(move |x, y| cam.ray(x, y)),
-            image: (cam.width, cam.height),
-            lights: vec![Arc::new(move |_, _| light)],
-        }
-    }
-
-    /// The same scene with every point mapped by `p -> scale * p + offset`
-    /// (camera origins and lights too; directions are unchanged).
-    pub fn transformed(&self, scale: f32, offset: Vec3) -> Self {
-        let f = move |p: Vec3| scale * p + offset;
-        let prims = Primitives {
-            triangles: self.prims.triangles.iter().map(|t| crate::geometry::Triangle { v: t.v.map(f) }).collect(),
-            spheres: self
-                .prims
-                .spheres
-                .iter()
-                .map(|s| crate::geometry::Sphere { center: f(s.center), radius: scale * s.radius })
-                .collect(),
-        };
-        let cam = self.camera.clone();
-        let camera: CameraFn = Arc::new(move |x, y| {
-            let r = cam(x, y);
-            Ray::with_range(f(r.origin), r.dir, r.t_min * scale, r.t_max * scale)
-        });
-        let lights = self
-            .lights
-            .iter()
-            .map(|l| {
-                let l = l.clone();
-                Arc::new(move |u, v| f(l(u, v))) as LightFn
-            })
-            .collect();
-        Self { prims: Arc::new(prims), camera, image: self.image, lights }
-    }
-}
+use super::{RayContext, Rng, Topology};
 
 /// The ray sets.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
@@ -288,76 +128,6 @@ pub struct RaySet {
     pub rays: Vec<Ray>,
     /// One tag per ray.
     pub tags: Vec<RayTag>,
-}
-
-/// Shared-edge and vertex-fan topology of the triangles, with vertices
-/// welded by exact position (so unwelded seams with identical coordinates,
-/// like the teapot's, count as shared).
-pub struct Topology {
-    /// Edges used by exactly two triangles: `(a, b, tri0, tri1)`.
-    pub shared_edges: Vec<(Vec3, Vec3, u32, u32)>,
-    /// Vertices whose fan is a closed, consistently oriented cycle: `(position, triangles)`.
-    pub closed_vertices: Vec<(Vec3, Vec<u32>)>,
-}
-
-impl Topology {
-    /// Compute the topology of `prims.triangles`.
-    pub fn new(prims: &Primitives) -> Self {
-        let key = |p: Vec3| (p.x.to_bits(), p.y.to_bits(), p.z.to_bits());
-        let mut ids: HashMap<(u32, u32, u32), u32> = HashMap::new();
-        let mut pos = Vec::new();
-        let tris: Vec<[u32; 3]> = prims
-            .triangles
-            .iter()
-            .map(|t| {
-                t.v.map(|p| {
-                    *ids.entry(key(p)).or_insert_with(|| {
-                        pos.push(p);
-                        pos.len() as u32 - 1
-                    })
-                })
-            })
-            .collect();
-        let mut edges: HashMap<(u32, u32), Vec<(u32, bool)>> = HashMap::new();
-        let mut fans: Vec<Vec<u32>> = vec![Vec::new(); pos.len()];
-        for (i, t) in tris.iter().enumerate() {
-            if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
-                continue;
-            }
-            for k in 0..3 {
-                let (a, b) = (t[k], t[(k + 1) % 3]);
-                edges.entry((a.min(b), a.max(b))).or_default().push((i as u32, a < b));
-                fans[a as usize].push(i as u32);
-            }
-        }
-        let mut shared_edges: Vec<_> = edges
-            .iter()
-            // Two triangles, opposite directions: a manifold, consistently wound edge.
-            .filter(|(_, v)| v.len() == 2 && v[0].1 != v[1].1)
-            .map(|(&(a, b), v)| (pos[a as usize], pos[b as usize], v[0].0, v[1].0))
-            .collect();
-        // HashMap order is random: sort for determinism.
-        shared_edges.sort_by_key(|e| (e.2, e.3));
-        let mut closed_vertices = Vec::new();
-        for (vi, fan) in fans.into_iter().enumerate() {
-            if fan.len() < 3 {
-                continue;
-            }
-            // Closed fan: every edge from the vertex is shared by exactly two
-            // fan triangles, in opposite directions, and is manifold.
-            let vi = vi as u32;
-            let closed = fan.iter().all(|&t| {
-                let tri = tris[t as usize];
-                tri.iter()
-                    .filter(|&&w| w != vi)
-                    .all(|&w| edges.get(&(vi.min(w), vi.max(w))).is_some_and(|v| v.len() == 2 && v[0].1 != v[1].1))
-            });
-            if closed {
-                closed_vertices.push((pos[vi as usize], fan));
-            }
-        }
-        Self { shared_edges, closed_vertices }
-    }
 }
 
 /// Largest absolute coordinate of the scene and the camera: the scale that
@@ -631,6 +401,7 @@ mod tests {
     use super::*;
     use crate::accel::BruteForce;
     use crate::geometry::{Triangle, TriangleTest};
+    use crate::rays::PinholeCamera;
 
     /// A closed tetrahedron (every edge shared, every vertex fan closed).
     fn tetra() -> Arc<Primitives> {

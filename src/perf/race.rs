@@ -1,4 +1,4 @@
-//! `rtdiff bench --race ROUNDS`: the `sah` build with the `fast` traversal
+//! The race behind `rtdiff bench --race ROUNDS`: the `sah` build with the `fast` traversal
 //! against Embree's MEDIUM build with rtcIntersect1 / rtcOccluded1, single
 //! threaded, on the same rays, interleaved round by round in one process.
 //!
@@ -11,41 +11,48 @@
 
 use std::sync::Arc;
 
-use crate::accel::{AccelConfig, Builder, EmbreeQuality, Tracer, Traversal, build_tracer};
-use crate::embree::{Device, EmbreeTracer};
+use serde::Serialize;
+
 use crate::error::Result;
 use crate::geometry::{Primitives, Ray};
 
-use super::bench::{Clock, single_pool};
+use super::clock::quartiles;
 
 /// Rays per alternation between the two tracers (256 KiB of rays, which
 /// stay in the second-level cache for both).
-const CHUNK: usize = 8192;
+pub const CHUNK: usize = 8192;
 
-/// Median, first and last quartile of `v` (sorted in place).
-fn quartiles(v: &mut [f64]) -> (f64, f64, f64) {
-    v.sort_by(f64::total_cmp);
-    let at = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize];
-    (at(0.5), at(0.25), at(0.75))
+/// One contest over the rounds.
+#[derive(Clone, Debug, Serialize)]
+pub struct Contest {
+    /// `build`, or the ray set's name.
+    pub name: String,
+    /// Rays in the set (0 for the build).
+    pub rays: usize,
+    /// Per-round seconds, rtdiff then Embree.
+    pub times: Vec<(f64, f64)>,
 }
 
-/// Thread CPU seconds of one call of `f`.
-fn cpu_seconds<T>(f: impl FnOnce() -> T) -> (f64, T) {
-    let clock = Clock { cpu: true };
-    let start = clock.now();
-    let r = f();
-    (clock.since(start), r)
-}
-
-/// One contest: a name and the per-round (rtdiff, Embree) seconds.
-struct Contest {
-    name: &'static str,
-    rays: usize,
-    times: Vec<(f64, f64)>,
+/// Summary of a contest: medians and the spread of the per-round ratio.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct ContestSummary {
+    /// Median seconds of rtdiff.
+    pub rtdiff_s: f64,
+    /// Median seconds of Embree.
+    pub embree_s: f64,
+    /// Median of Embree time / rtdiff time (above 1: rtdiff faster).
+    pub ratio: f64,
+    /// First quartile of the ratio.
+    pub q1: f64,
+    /// Third quartile of the ratio.
+    pub q3: f64,
+    /// Rounds rtdiff won.
+    pub wins: usize,
 }
 
 impl Contest {
-    fn print(&self) {
+    /// Medians and ratio quartiles over the rounds.
+    pub fn summary(&self) -> ContestSummary {
         let mut ratio: Vec<f64> = self.times.iter().map(|(r, e)| e / r).collect();
         let mut ours: Vec<f64> = self.times.iter().map(|t| t.0).collect();
         let mut theirs: Vec<f64> = self.times.iter().map(|t| t.1).collect();
@@ -53,37 +60,42 @@ impl Contest {
         let wins = ratio.iter().filter(|&&r| r > 1.0).count();
         let (mo, _, _) = quartiles(&mut ours);
         let (me, _, _) = quartiles(&mut theirs);
-        let (a, b) = if self.rays > 0 {
-            (
-                format!("{:.2} Mrays/s", self.rays as f64 / mo / 1e6),
-                format!("{:.2} Mrays/s", self.rays as f64 / me / 1e6),
-            )
-        } else {
-            (format!("{:.2} ms", mo * 1e3), format!("{:.2} ms", me * 1e3))
-        };
-        println!(
-            "{:<12} {:>16} {:>16} {:>7.3} {:>7.3} {:>7.3} {:>5}/{}",
-            self.name,
-            a,
-            b,
-            m,
-            q1,
-            q3,
-            wins,
-            ratio.len()
-        );
+        ContestSummary { rtdiff_s: mo, embree_s: me, ratio: m, q1, q3, wins }
     }
 }
 
+/// Everything a race measured.
+#[derive(Clone, Debug, Serialize)]
+pub struct RaceReport {
+    /// Interleaved rounds.
+    pub rounds: usize,
+    /// `build`, then one contest per ray set.
+    pub contests: Vec<Contest>,
+    /// Sets on which the two tracers' hit counts differ: `(set, rtdiff, Embree)`.
+    pub hit_count_differences: Vec<(String, usize, usize)>,
+}
+
 /// Run `rounds` interleaved rounds on `prims` with the given ray sets.
-pub fn race(prims: &Arc<Primitives>, sets: &[(&'static str, &[Ray], bool)], rounds: usize) -> Result<()> {
+#[cfg(feature = "embree")]
+pub fn race(prims: &Arc<Primitives>, sets: &[(&'static str, &[Ray], bool)], rounds: usize) -> Result<RaceReport> {
+    use super::clock::{cpu_seconds, single_pool};
+    use crate::accel::{AccelConfig, Builder, EmbreeQuality, Tracer, Traversal, build_tracer};
+    use crate::embree::{Device, EmbreeTracer};
+    if rounds == 0 {
+        return Err(crate::Error::Invalid("--race needs at least one round".into()));
+    }
     let one = single_pool()?;
     let device = Device::new("threads=1")?;
     let cfg = AccelConfig { builder: Builder::Sah, traversal: Traversal::Fast, ..Default::default() };
     let ours = one.install(|| build_tracer(prims.clone(), &cfg))?;
     let theirs = EmbreeTracer::with_device(&device, prims.clone(), EmbreeQuality::Medium)?;
-    let mut contests = vec![Contest { name: "build", rays: 0, times: Vec::new() }];
-    contests.extend(sets.iter().map(|(name, rays, _)| Contest { name, rays: rays.len(), times: Vec::new() }));
+    let mut contests = vec![Contest { name: "build".into(), rays: 0, times: Vec::new() }];
+    let mut hit_count_differences = Vec::new();
+    contests.extend(sets.iter().map(|(name, rays, _)| Contest {
+        name: name.to_string(),
+        rays: rays.len(),
+        times: Vec::new(),
+    }));
 
     let run_set = |t: &dyn Tracer, rays: &[Ray], any: bool| -> usize {
         if any {
@@ -130,21 +142,18 @@ pub fn race(prims: &Arc<Primitives>, sets: &[(&'static str, &[Ray], bool)], roun
                 (ta, tb, ha, hb) = (ta + a.0, tb + b.0, ha + a.1, hb + b.1);
             }
             if ha != hb {
-                eprintln!("note: {} hits differ on {}: rtdiff {ha}, Embree {hb}", ha.abs_diff(hb), sets[k].0);
+                hit_count_differences.push((sets[k].0.to_string(), ha, hb));
             }
             contests[k + 1].times.push((ta, tb));
         }
     }
-    println!(
-        "\n### rtdiff sah/fast against Embree MEDIUM (rtcIntersect1 / rtcOccluded1), 1 thread, {rounds} interleaved rounds"
-    );
-    println!("ratio = Embree time / rtdiff time in the same round (above 1: rtdiff faster); CPU time of the thread");
-    println!(
-        "{:<12} {:>16} {:>16} {:>7} {:>7} {:>7} {:>7}",
-        "", "rtdiff (median)", "Embree (median)", "ratio", "q1", "q3", "wins"
-    );
-    for c in &contests {
-        c.print();
-    }
-    Ok(())
+    Ok(RaceReport { rounds, contests, hit_count_differences })
+}
+
+/// Without the Embree backend there is nothing to race.
+#[cfg(not(feature = "embree"))]
+pub fn race(_: &Arc<Primitives>, _: &[(&'static str, &[Ray], bool)], _: usize) -> Result<RaceReport> {
+    Err(crate::Error::Invalid(
+        "--race needs the Embree backend: run scripts/setup-embree.sh and build with --features embree".into(),
+    ))
 }
