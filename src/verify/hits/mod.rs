@@ -1,10 +1,12 @@
 //! Hit parity against an independent oracle (Embree or brute force): the
 //! error bounds two correct tracers may differ by ([`bounds`]), the
 //! classification of every disagreement ([`classify`]), the exact arbiter that
-//! decides who is right ([`arbiter`], on [`exact`] arithmetic), the run over
+//! decides who is right ([`arbiter`], on [`exact`] arithmetic, applied to every
+//! disagreement by [`arbitrate`]), the run over
 //! the ray sets of [`crate::rays`] ([`run`]) and its typed report ([`report`]).
 
 pub mod arbiter;
+pub mod arbitrate;
 pub mod bounds;
 pub mod classify;
 pub mod exact;
