@@ -10,6 +10,7 @@ pub mod arbitrate;
 pub mod bounds;
 pub mod classify;
 pub mod exact;
+pub mod line_index;
 pub mod report;
 pub mod run;
 
