@@ -217,8 +217,9 @@ fn offer(best: &mut Option<Hit>, ray: &mut Ray, t: f32, id: u32, u: f32, v: f32)
 
 /// The watertight test on four lanes: `(hit mask, uncertain mask, t, u, v)`.
 /// Lanes in the uncertain mask (some edge function within `SIGN_MARGIN`
-/// error bounds of 0 in single precision) are excluded from the hit mask and
-/// must be decided by the scalar routine.
+/// error bounds of 0 in single precision, or a distance in range that is not
+/// provably positive) are excluded from the hit mask and must be decided by
+/// the scalar routine.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn tri4_sse(p: &Tri4, ray: &Ray, wr: &WatertightRay) -> (u32, u32, [f32; PW], [f32; PW], [f32; PW]) {
@@ -295,8 +296,10 @@ fn tri4_sse(p: &Tri4, ray: &Ray, wr: &WatertightRay) -> (u32, u32, [f32; PW], [f
             ),
             abs(inv_det),
         );
-        let not_positive = _mm_cmple_ps(t, t_err);
+        // Lanes whose distance is not provably positive go to the scalar routine too.
+        let not_positive = _mm_and_ps(_mm_cmple_ps(t, t_err), ok);
         let ok = _mm_andnot_ps(not_positive, ok);
+        let zero_mask = zero_mask | _mm_movemask_ps(not_positive) as u32;
         let (mut ts, mut us, mut vs) = ([0.0f32; PW], [0.0f32; PW], [0.0f32; PW]);
         // Each array has room for 4 floats; storeu has no alignment requirement.
         _mm_storeu_ps(ts.as_mut_ptr(), t);
