@@ -1,14 +1,24 @@
-//! Links Intel Embree 4 when the `embree` feature is on.
+//! Links Intel Embree 4 when the `embree` feature is on, and records the
+//! compiler's version for the reports.
 //!
 //! The library comes from `scripts/setup-embree.sh` (into `third_party/embree/lib`).
 //! An absolute rpath lets binaries, tests and doctests run without
-//! `LD_LIBRARY_PATH`. Without the feature this script does nothing.
+//! `LD_LIBRARY_PATH`. Without the feature it links nothing.
 
 use std::path::PathBuf;
 
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");
     println!("cargo:rerun-if-env-changed=CARGO_FEATURE_EMBREE");
+    // The compiler's version, for the machine facts of `rtdiff report`.
+    let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
+    let version = std::process::Command::new(rustc)
+        .arg("--version")
+        .output()
+        .ok()
+        .and_then(|o| String::from_utf8(o.stdout).ok())
+        .map_or_else(|| "unknown".to_string(), |v| v.trim().to_string());
+    println!("cargo:rustc-env=RTDIFF_RUSTC_VERSION={version}");
     if std::env::var_os("CARGO_FEATURE_EMBREE").is_none() {
         return;
     }

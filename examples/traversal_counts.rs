@@ -7,8 +7,9 @@
 
 use rtdiff::accel::{AccelConfig, Builder};
 use rtdiff::bvh::wide::TraversalCounts;
+use rtdiff::camera::Camera;
 use rtdiff::geometry::TriangleTest;
-use rtdiff::rays::{Camera, incoherent_rays};
+use rtdiff::rays::incoherent_rays;
 
 fn main() -> rtdiff::Result<()> {
     let mut args = std::env::args().skip(1);
@@ -20,7 +21,7 @@ fn main() -> rtdiff::Result<()> {
     println!("{path}: {} primitives, {} wide nodes", prims.len(), bvh.nodes.len());
     println!("{:<12} {:>10} {:>10} {:>12} {:>14}", "rays", "nodes/ray", "leaves/ray", "packets/ray", "packets/leaf");
     let sets = [
-        ("primary", Camera::scene_default().rays(512, 512)),
+        ("primary", Camera::default_view(512, 512).pixel_centre_rays()),
         ("incoherent", incoherent_rays(&prims.world_bounds(), 262_144, 2024)),
     ];
     for (name, rays) in sets {

@@ -29,6 +29,12 @@ if [[ -x scripts/setup-embree.sh ]]; then
     features=(--features embree)
 fi
 
+# Mitsuba 3 + OpenImageIO + FLIP for the live export -> Mitsuba -> compare round trip
+# (tests/mitsuba_live.rs); with RTDIFF_REQUIRE_PYTHON=1 a missing environment fails the test.
+say "mitsuba: setting up the Python environment"
+scripts/mitsuba/setup.sh >&2
+export RTDIFF_REQUIRE_PYTHON=1
+
 say "cargo test ${features[*]:-}"
 log="$(mktemp)"
 trap 'rm -f "$log"' EXIT

@@ -6,6 +6,14 @@ use glam::Vec3;
 use crate::geometry::Ray;
 use crate::sampler::concentric_disk;
 
+/// The course's default eye: 3 units from the origin, rotated 20 degrees
+/// about x and y (the view of a mesh normalised to the unit sphere). The one
+/// default of the scene files, `bench`, `parity` and the tests.
+pub const DEFAULT_EYE: Vec3 = Vec3::new(-0.964_181, 1.026_06, -2.649_067);
+
+/// The default vertical field of view, in degrees.
+pub const DEFAULT_FOV: f32 = 50.0;
+
 /// A perspective camera with an optional thin lens.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Camera {
@@ -46,6 +54,23 @@ impl Camera {
             aperture_radius: 0.0,
             focus_distance: (target - position).length(),
         }
+    }
+
+    /// The default view ([`DEFAULT_EYE`] looking at the origin, y up,
+    /// [`DEFAULT_FOV`]) for a `width` x `height` image.
+    pub fn default_view(width: u32, height: u32) -> Self {
+        Self::look_at(DEFAULT_EYE, Vec3::ZERO, Vec3::Y, DEFAULT_FOV, width, height)
+    }
+
+    /// One pinhole ray through the centre of each pixel, row by row.
+    pub fn pixel_centre_rays(&self) -> Vec<Ray> {
+        let mut out = Vec::with_capacity(self.width as usize * self.height as usize);
+        for y in 0..self.height {
+            for x in 0..self.width {
+                out.push(self.ray(x as f32 + 0.5, y as f32 + 0.5));
+            }
+        }
+        out
     }
 
     /// Unit direction through continuous pixel position `(px, py)`, with

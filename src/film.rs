@@ -42,26 +42,14 @@ impl Image {
         match ext.as_deref() {
             Some("png") => image::save_buffer(path, &self.to_srgb8(), self.width, self.height, image::ColorType::Rgb8)
                 .map_err(|e| Error::file(path, format!("cannot write PNG: {e}"))),
-            Some("exr") => exr::prelude::write_rgb_file(path, self.width as usize, self.height as usize, |x, y| {
-                let p = self.pixels[y * self.width as usize + x];
-                (p.x, p.y, p.z)
-            })
-            .map_err(|e| Error::file(path, format!("cannot write EXR: {e}"))),
+            // Byte-deterministic (see `verify::image::image`): same pixels, same file.
+            Some("exr") => crate::verify::image::image::write_exr(self, path),
             _ => Err(Error::file(path, "unknown output format: use a .png or .exr file name")),
         }
     }
 
-    /// Read a linear EXR written by [`Image::write`] (or any RGB EXR).
+    /// Read the R, G and B channels of an EXR (see [`crate::verify::image::image::read_exr`]).
     pub fn read_exr(path: &Path) -> Result<Self> {
-        let img = exr::prelude::read_first_rgba_layer_from_file(
-            path,
-            |res, _| Image::new(res.width() as u32, res.height() as u32),
-            |img: &mut Image, pos: exr::prelude::Vec2<usize>, (r, g, b, _a): (f32, f32, f32, f32)| {
-                let w = img.width as usize;
-                img.pixels[pos.y() * w + pos.x()] = Vec3::new(r, g, b);
-            },
-        )
-        .map_err(|e| Error::file(path, format!("cannot read EXR: {e}")))?;
-        Ok(img.layer_data.channel_data.pixels)
+        crate::verify::image::image::read_exr(path)
     }
 }

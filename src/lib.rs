@@ -23,6 +23,7 @@ pub mod perf;
 pub mod post;
 pub mod rays;
 pub mod render;
+pub mod report;
 pub mod rng;
 pub mod sampler;
 pub mod scene;

@@ -24,6 +24,12 @@ enum Command {
     Parity(rtdiff::cli::parity::ParityArgs),
     /// Trace rays from a CSV file and write the hits as CSV.
     Trace(rtdiff::cli::trace::TraceArgs),
+    /// Export a scene for Mitsuba 3 (the image oracle): scene.xml, PLY meshes, textures.
+    Export(rtdiff::cli::export::ExportArgs),
+    /// Write the performance table, convergence and stability reports (JSON, Markdown, SVG, index.html).
+    Report(rtdiff::cli::report::ReportArgs),
+    /// Compare two images (EXR or PNG): MAE, RMSE, relMSE, PSNR, max error, pixels over thresholds, FLIP.
+    Compare(rtdiff::cli::compare::CompareArgs),
 }
 
 fn main() {
@@ -35,6 +41,9 @@ fn main() {
         Command::Bench(a) => rtdiff::cli::bench::run(a),
         Command::Parity(a) => rtdiff::cli::parity::run(a),
         Command::Trace(a) => rtdiff::cli::trace::run(a),
+        Command::Export(a) => rtdiff::cli::export::run(a),
+        Command::Report(a) => rtdiff::cli::report::run(a),
+        Command::Compare(a) => rtdiff::cli::compare::run(a),
     };
     if let Err(e) = result {
         eprintln!("rtdiff: error: {e}");

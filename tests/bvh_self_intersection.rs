@@ -10,9 +10,9 @@ use std::sync::Arc;
 use common::{CORNELL_BOXES, CORNELL_ROOM_TRIS, cornell};
 use glam::{DVec3, Vec3};
 use rtdiff::accel::{AccelConfig, Traversal, build_tracer};
-use rtdiff::geometry::offset::{SpawnOffset, spawn_origin};
-use rtdiff::geometry::{Hit, Ray};
-use rtdiff::rays::{Camera, surface_point};
+use rtdiff::camera::Camera;
+use rtdiff::geometry::Hit;
+use rtdiff::geometry::offset::SpawnOffset;
 
 /// Does the segment `p -> q` come within `margin` of the box `[lo, hi]`? (f64 slab test on the grown box)
 fn segment_near_box(p: DVec3, q: DVec3, lo: DVec3, hi: DVec3, margin: f64) -> bool {
@@ -44,12 +44,7 @@ fn false_shadow_hits(scale: f32, shift: f32, policy: SpawnOffset) -> (usize, usi
     let prims = Arc::new(cornell(scale, shift));
     let map = |v: Vec3| v * scale + Vec3::splat(shift);
     let light = map(Vec3::new(0.5, 0.9, 0.5));
-    let cam = Camera {
-        eye: map(Vec3::new(0.5, 0.5, -1.4)),
-        target: map(Vec3::new(0.5, 0.5, 0.5)),
-        up: Vec3::Y,
-        vfov_deg: 50.0,
-    };
+    let cam = Camera::look_at(map(Vec3::new(0.5, 0.5, -1.4)), map(Vec3::new(0.5, 0.5, 0.5)), Vec3::Y, 50.0, 200, 200);
     let tracer = build_tracer(prims.clone(), &AccelConfig::default()).unwrap();
     let basic =
         build_tracer(prims.clone(), &AccelConfig { traversal: Traversal::Basic, ..Default::default() }).unwrap();
@@ -58,9 +53,10 @@ fn false_shadow_hits(scale: f32, shift: f32, policy: SpawnOffset) -> (usize, usi
     // closed-form answer is not itself decided by rounding.
     let margin = 0.01 * f64::from(scale);
     let (mut checked, mut false_hits) = (0, 0);
-    for ray in cam.rays(200, 200) {
+    for ray in cam.pixel_centre_rays() {
         let Some(hit): Option<Hit> = tracer.intersect(&ray) else { continue };
-        let (p, err, n) = surface_point(&prims, &ray, &hit);
+        let si = prims.interaction(&ray, &hit);
+        let (p, n) = (si.p, si.ng);
         let to_light = light - p;
         let nn = n.normalize();
         let cos = nn.dot(to_light.normalize());
@@ -88,8 +84,7 @@ fn false_shadow_hits(scale: f32, shift: f32, policy: SpawnOffset) -> (usize, usi
             continue;
         }
         checked += 1;
-        let o = spawn_origin(policy, p, err, n, to_light);
-        let shadow = Ray::with_range(o, light - o, 0.0, 1.0);
+        let shadow = si.spawn_ray_to(policy, light, 1.0);
         let occluded = tracer.occluded(&shadow);
         assert_eq!(occluded, basic.occluded(&shadow), "fast and basic traversals disagree on a shadow ray");
         false_hits += usize::from(occluded);
@@ -109,5 +104,45 @@ fn robust_offset_has_no_false_shadow_hits() {
         // 200 x 200 camera rays into the open box: most land on lit, unblocked surface.
         assert!(checked > 10_000, "only {checked} points checked");
         assert_eq!(robust, 0, "scale {scale}, shift {shift}: robust offset produced false shadow hits");
+    }
+}
+
+/// Spheres through the renderer's own spawn path
+/// ([`rtdiff::geometry::Primitives::interaction`] then
+/// [`rtdiff::geometry::SurfaceInteraction::spawn_ray_to`], as the integrator
+/// does): a lone sphere is convex, so a shadow ray from a point whose normal
+/// faces the light (cosine above 1e-3, away from rounding) must never be
+/// blocked. Radii 1e-3 to 1e3, centres up to 1e4 from the origin, including the
+/// issue's ground sphere whose top sits near a coordinate plane.
+#[test]
+fn spheres_far_from_the_origin_do_not_shadow_themselves() {
+    use rtdiff::geometry::{Primitives, Sphere};
+    let cases = [
+        (1.0f32, Vec3::new(0.0, -1.0, 0.0)),
+        (20.0, Vec3::new(0.0, -20.0, 0.0)),
+        (100.0, Vec3::new(0.0, -100.0, 0.0)),
+        (1e-3, Vec3::new(1e4, 1e4, -1e4)),
+        (1.0, Vec3::new(1e4, -1e4, 1e4)),
+        (1e3, Vec3::new(-1e4, 0.0, 1e4)),
+    ];
+    for (radius, center) in cases {
+        let prims = Arc::new(Primitives { triangles: vec![], spheres: vec![Sphere { center, radius }] });
+        let tracer = build_tracer(prims.clone(), &AccelConfig::default()).unwrap();
+        let eye = center + radius * Vec3::new(0.3, 2.5, -4.0);
+        let light = center + radius * Vec3::new(0.2, 4.0, 0.1);
+        let cam = Camera::look_at(eye, center, Vec3::Y, 40.0, 200, 200);
+        let (mut checked, mut false_hits) = (0, 0);
+        for ray in cam.pixel_centre_rays() {
+            let Some(hit) = tracer.intersect(&ray) else { continue };
+            let si = prims.interaction(&ray, &hit);
+            if si.ng.dot((light - si.p).normalize()) <= 1e-3 {
+                continue;
+            }
+            checked += 1;
+            false_hits += usize::from(tracer.occluded(&si.spawn_ray_to(SpawnOffset::Robust, light, 1.0)));
+        }
+        println!("sphere R = {radius:e} at {center}: {false_hits} false shadow hits of {checked}");
+        assert!(checked > 5_000, "only {checked} points checked");
+        assert_eq!(false_hits, 0, "sphere R = {radius} at {center}: {false_hits} false shadow hits of {checked}");
     }
 }

@@ -9,7 +9,7 @@ use glam::{Vec3A, Vec4};
 use rayon::prelude::*;
 
 use crate::accel::Builder;
-use crate::geometry::{Aabb, Primitives};
+use crate::geometry::{Aabb, Prim, Primitives};
 
 use super::{LeafPrims, Node};
 
@@ -108,17 +108,12 @@ pub struct BuildInput {
 impl BuildInput {
     /// Vertex means when `vertex_means` is set (computed in parallel).
     pub fn new(prims: &Primitives, vertex_means: bool) -> Self {
-        let nt = prims.triangles.len();
         let vertex_means = (0..if vertex_means { prims.len() } else { 0 })
             .into_par_iter()
             .with_min_len(4096)
-            .map(|i| {
-                if i < nt {
-                    let v = prims.triangles[i].v;
-                    Vec3A::from((v[0] + v[1] + v[2]) / 3.0)
-                } else {
-                    Vec3A::from(prims.spheres[i - nt].center)
-                }
+            .map(|i| match prims.get(i) {
+                Prim::Triangle(t) => Vec3A::from((t.v[0] + t.v[1] + t.v[2]) / 3.0),
+                Prim::Sphere(s) => Vec3A::from(s.center),
             })
             .collect();
         Self { vertex_means }

@@ -4,7 +4,7 @@
 use glam::Vec3;
 
 use crate::geometry::triangle::{WatertightRay, intersect_moller_trumbore};
-use crate::geometry::{Hit, Primitives, Ray, Sphere, TriangleTest};
+use crate::geometry::{Hit, Prim, Primitives, Ray, Sphere, TriangleTest};
 
 /// One primitive in leaf order: its data and its original id, 40 bytes,
 /// so a leaf's primitives are read as one contiguous stream.
@@ -40,11 +40,9 @@ impl LeafPrims {
             .iter()
             .map(|&id| {
                 let i = id as usize;
-                let v = if i < nt {
-                    prims.triangles[i].v
-                } else {
-                    let s = prims.spheres[i - nt];
-                    [s.center, Vec3::new(s.radius, 0.0, 0.0), Vec3::ZERO]
+                let v = match prims.get(i) {
+                    Prim::Triangle(t) => t.v,
+                    Prim::Sphere(s) => [s.center, Vec3::new(s.radius, 0.0, 0.0), Vec3::ZERO],
                 };
                 LeafEntry { v, id }
             })

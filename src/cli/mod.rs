@@ -3,7 +3,10 @@
 
 pub mod bench;
 pub mod bvh_stats;
+pub mod compare;
 pub mod debug;
+pub mod export;
 pub mod parity;
 pub mod render;
+pub mod report;
 pub mod trace;

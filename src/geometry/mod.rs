@@ -4,6 +4,8 @@
 
 pub mod aabb;
 pub mod hit;
+pub mod interaction;
+pub mod normalize;
 pub mod offset;
 pub mod primitives;
 pub mod ray;
@@ -12,7 +14,9 @@ pub mod triangle;
 
 pub use aabb::Aabb;
 pub use hit::Hit;
-pub use primitives::{Primitives, Triangle};
+pub use interaction::SurfaceInteraction;
+pub use normalize::normalize_to_unit_sphere;
+pub use primitives::{Prim, Primitives, Triangle};
 pub use ray::Ray;
 pub use sphere::Sphere;
 pub use triangle::TriangleTest;

@@ -49,12 +49,6 @@ pub fn triangle_point_error(b: [f32; 3], p: [Vec3; 3]) -> Vec3 {
     (gamma(7) * ((b[0] * p[0]).abs() + (b[1] * p[1]).abs() + (b[2] * p[2]).abs())).max(Vec3::splat(gamma(7) * scale))
 }
 
-/// Error bound of a point reprojected onto a sphere surface (pbrt-v4, eq. 6.29).
-#[inline]
-pub fn sphere_point_error(p: Vec3) -> Vec3 {
-    gamma(5) * p.abs()
-}
-
 /// Next representable float above `v` (towards +inf).
 #[inline]
 pub fn next_up(v: f32) -> f32 {

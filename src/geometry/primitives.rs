@@ -2,7 +2,7 @@
 
 use glam::Vec3;
 
-use super::{Aabb, Ray, Sphere, TriangleTest, triangle};
+use super::{Aabb, Hit, Ray, Sphere, SurfaceInteraction, TriangleTest, triangle};
 
 /// A triangle by its three vertices (winding defines the geometric normal).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -30,6 +30,15 @@ impl Triangle {
     }
 }
 
+/// One primitive of [`Primitives`], by reference.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Prim<'a> {
+    /// A triangle.
+    Triangle(&'a Triangle),
+    /// A sphere.
+    Sphere(&'a Sphere),
+}
+
 /// All geometry of a scene as seen by a tracer: triangles get primitive ids
 /// `0..triangles.len()`, spheres the ids after them.
 #[derive(Clone, Debug, Default)]
@@ -52,11 +61,36 @@ impl Primitives {
         self.len() == 0
     }
 
+    /// Primitive `i` (triangles first, then spheres): the one place the
+    /// global id is decoded.
+    #[inline]
+    pub fn get(&self, i: usize) -> Prim<'_> {
+        let nt = self.triangles.len();
+        if i < nt { Prim::Triangle(&self.triangles[i]) } else { Prim::Sphere(&self.spheres[i - nt]) }
+    }
+
+    /// Sphere index of primitive `i`, `None` for a triangle.
+    #[inline]
+    pub fn sphere_index(&self, i: usize) -> Option<usize> {
+        i.checked_sub(self.triangles.len())
+    }
+
+    /// The surface interaction of `hit` along `ray`, computed by the primitive hit.
+    #[inline]
+    pub fn interaction(&self, ray: &Ray, hit: &Hit) -> SurfaceInteraction {
+        match self.get(hit.prim as usize) {
+            Prim::Triangle(t) => t.interaction(hit),
+            Prim::Sphere(s) => s.interaction(ray, hit),
+        }
+    }
+
     /// Bounding box of primitive `i`.
     #[inline]
     pub fn bounds(&self, i: usize) -> Aabb {
-        let nt = self.triangles.len();
-        if i < nt { self.triangles[i].bounds() } else { self.spheres[i - nt].bounds() }
+        match self.get(i) {
+            Prim::Triangle(t) => t.bounds(),
+            Prim::Sphere(s) => s.bounds(),
+        }
     }
 
     /// Centroid of primitive `i`'s bounding box (what BVH builders split on).
@@ -80,15 +114,15 @@ impl Primitives {
         wr: &triangle::WatertightRay,
         test: TriangleTest,
     ) -> Option<(f32, f32, f32)> {
-        let nt = self.triangles.len();
-        if i < nt {
-            let [a, b, c] = self.triangles[i].v;
-            match test {
-                TriangleTest::Watertight => triangle::intersect_watertight(ray, wr, a, b, c),
-                TriangleTest::MollerTrumbore => triangle::intersect_moller_trumbore(ray, a, b, c),
+        match self.get(i) {
+            Prim::Triangle(t) => {
+                let [a, b, c] = t.v;
+                match test {
+                    TriangleTest::Watertight => triangle::intersect_watertight(ray, wr, a, b, c),
+                    TriangleTest::MollerTrumbore => triangle::intersect_moller_trumbore(ray, a, b, c),
+                }
             }
-        } else {
-            self.spheres[i - nt].intersect(ray)
+            Prim::Sphere(s) => s.intersect(ray),
         }
     }
 }

@@ -182,7 +182,7 @@ impl Recorder for RayTree {
         node.hit = hit.map(|(h, it)| HitRecord {
             prim: h.prim,
             t: h.t,
-            position: it.p.into(),
+            position: it.si.p.into(),
             normal: it.ns.into(),
             uv: it.uv.into(),
             material: it.material,

@@ -7,8 +7,8 @@ use super::debug::{NoRecorder, RayKind, Recorder};
 use super::{Counters, Integrator};
 use crate::accel::Tracer;
 use crate::features::Plan;
-use crate::geometry::offset::{self, SpawnOffset};
-use crate::geometry::{Hit, Ray};
+use crate::geometry::offset::SpawnOffset;
+use crate::geometry::{Hit, Ray, SurfaceInteraction};
 use crate::light::LightSample;
 use crate::material::Material;
 use crate::rng::Pcg32;
@@ -27,12 +27,10 @@ const MAX_SHADOW_CROSSINGS: u32 = 64;
 /// Everything known about a hit point.
 #[derive(Clone, Copy, Debug)]
 pub struct Interaction {
-    /// Position (computed from barycentrics, not `o + t d`).
-    pub p: Vec3,
-    /// Bound on the absolute error of `p`.
-    pub p_err: Vec3,
-    /// Unit geometric normal, facing the incoming ray.
-    pub ng: Vec3,
+    /// Point, error bound and unit geometric normal, from the primitive hit
+    /// ([`crate::geometry::Primitives::interaction`]); the normal flipped to
+    /// face the incoming ray.
+    pub si: SurfaceInteraction,
     /// Unit shading normal, on the same side as `ng`.
     pub ns: Vec3,
     /// Texture coordinates (zero without uvs).
@@ -59,15 +57,11 @@ impl<'a> Whitted<'a> {
 
     /// Surface data at `hit` along `ray`.
     pub fn interaction(&self, ray: &Ray, hit: &Hit) -> Interaction {
-        let prims = &self.scene.prims;
-        let nt = prims.triangles.len();
-        let i = hit.prim as usize;
-        let (p, p_err, mut ng, mut ns, uv, has_uv) = if i < nt {
-            let v = prims.triangles[i].v;
-            let w = [1.0 - hit.u - hit.v, hit.u, hit.v];
-            let p = w[0] * v[0] + w[1] * v[1] + w[2] * v[2];
-            let ng = prims.triangles[i].normal().normalize();
-            let sh = &self.scene.triangle_shading[i];
+        let mut si = self.scene.prims.interaction(ray, hit);
+        let ng = si.ng;
+        let (mut ns, uv, has_uv) = if self.scene.prims.sphere_index(hit.prim as usize).is_none() {
+            let w = si.b;
+            let sh = &self.scene.triangle_shading[hit.prim as usize];
             let ns = if self.plan.normal_interpolation {
                 (w[0] * sh.normals[0] + w[1] * sh.normals[1] + w[2] * sh.normals[2]).normalize_or(ng)
             } else {
@@ -78,27 +72,24 @@ impl<'a> Whitted<'a> {
             } else {
                 Vec2::ZERO
             };
-            (p, offset::triangle_point_error(w, v), ng, ns, uv, sh.has_uvs)
+            (ns, uv, sh.has_uvs)
         } else {
-            let s = prims.spheres[i - nt];
-            let n = (ray.at(hit.t) - s.center).normalize();
-            let p = s.center + s.radius * n;
-            (p, offset::sphere_point_error(p), n, n, Vec2::new(hit.u, 1.0 - hit.v), true)
+            (ng, Vec2::new(hit.u, 1.0 - hit.v), true)
         };
         // Two-sided surfaces: both normals face the side the ray came from.
-        if ng.dot(ray.dir) > 0.0 {
-            ng = -ng;
+        if si.ng.dot(ray.dir) > 0.0 {
+            si.ng = -si.ng;
         }
-        if ns.dot(ng) < 0.0 {
+        if ns.dot(si.ng) < 0.0 {
             ns = -ns;
         }
-        Interaction { p, p_err, ng, ns, uv, has_uv, material: self.scene.material_of(hit.prim) }
+        Interaction { si, ns, uv, has_uv, material: self.scene.material_of(hit.prim) }
     }
 
     /// A ray leaving `it` in direction `d` (`t_max` in units of `d`).
     #[inline]
     fn spawn(&self, it: &Interaction, d: Vec3, t_max: f32) -> Ray {
-        Ray::with_range(offset::spawn_origin(self.offset, it.p, it.p_err, it.ng, d), d, 0.0, t_max)
+        it.si.spawn_ray(self.offset, d, t_max)
     }
 
     /// Diffuse colour at `it` (texture lookup only when the plan has textures).
@@ -117,8 +108,7 @@ impl<'a> Whitted<'a> {
     /// Fraction of light from `target` that reaches `it`: 0 or 1 for opaque
     /// blockers, attenuated by `1 - opacity` per transparent surface crossed.
     pub fn visibility<R: Recorder>(&self, it: &Interaction, target: Vec3, c: &mut Counters, rec: &mut R) -> f32 {
-        let origin = offset::spawn_origin(self.offset, it.p, it.p_err, it.ng, target - it.p);
-        let mut ray = Ray::with_range(origin, target - origin, 0.0, SHADOW_T_MAX);
+        let mut ray = it.si.spawn_ray_to(self.offset, target, SHADOW_T_MAX);
         c.shadow_rays += 1;
         if !self.plan.transparency && !R::ACTIVE {
             return if self.tracer.occluded(&ray) { 0.0 } else { 1.0 };
@@ -134,8 +124,7 @@ impl<'a> Whitted<'a> {
                 return 0.0;
             }
             transmitted *= 1.0 - m.opacity;
-            let o = offset::spawn_origin(self.offset, blocker.p, blocker.p_err, blocker.ng, ray.dir);
-            ray = Ray::with_range(o, target - o, 0.0, SHADOW_T_MAX);
+            ray = blocker.si.spawn_ray_to(self.offset, target, SHADOW_T_MAX);
             c.shadow_rays += 1;
         }
         0.0
@@ -153,7 +142,7 @@ impl<'a> Whitted<'a> {
         c: &mut Counters,
         rec: &mut R,
     ) -> Vec3 {
-        let sp = SurfacePoint { p: it.p, n: it.ns, wo, kd, ks: m.ks, shininess: m.shininess };
+        let sp = SurfacePoint { p: it.si.p, n: it.ns, wo, kd, ks: m.ks, shininess: m.shininess };
         let shading = model(m.model);
         let mut sum = Vec3::ZERO;
         for (li, light) in self.scene.lights.iter().enumerate() {
@@ -210,7 +199,7 @@ impl<'a> Whitted<'a> {
             let du = (rng.next_f32() - 0.5) * a;
             let dw = (rng.next_f32() - 0.5) * a;
             let g = (r + du * u + dw * w).normalize();
-            if g.dot(it.ng) <= 0.0 {
+            if g.dot(it.si.ng) <= 0.0 {
                 continue; // would enter the surface: no light arrives from there
             }
             c.secondary_rays += 1;

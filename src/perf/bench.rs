@@ -11,15 +11,16 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::accel::{AccelConfig, Backend, Builder, EmbreeQuality, Tracer, Traversal, build_tracer};
+use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::geometry::offset::SpawnOffset;
 use crate::geometry::{Hit, Primitives, Ray};
-use crate::rays::{Camera, incoherent_rays, shadow_rays};
+use crate::rays::{incoherent_rays, shadow_rays};
 
 use super::clock::{single_pool, timed};
 
 /// The benchmark's point light.
-pub const LIGHT: Vec3 = Vec3::new(-1.0, 1.0, -1.0);
+pub const LIGHT: Vec3 = crate::rays::DEFAULT_LIGHT;
 
 /// Seed of the incoherent rays.
 pub const INCOHERENT_SEED: u64 = 2024;
@@ -167,7 +168,7 @@ impl RaySets {
     /// incoherent rays, and shadow rays from the primary hits of `reference`
     /// towards [`LIGHT`].
     pub fn new(prims: &Arc<Primitives>, size: u32, incoherent: usize, reference: &dyn Tracer) -> Self {
-        let primary = Camera::scene_default().rays(size, size);
+        let primary = Camera::default_view(size, size).pixel_centre_rays();
         let hits: Vec<Option<Hit>> = primary.par_iter().map(|r| reference.intersect(r)).collect();
         let shadow = shadow_rays(prims, &primary, &hits, LIGHT, SpawnOffset::Robust);
         let primary_hits = hits.iter().filter(|h| h.is_some()).count();

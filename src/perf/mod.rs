@@ -1,11 +1,19 @@
 //! Measurement: clocks ([`clock`]), the builder x traversal benchmark
-//! ([`bench`]) and the interleaved race against Embree ([`race`]). Each
-//! returns a typed, serialisable report; `cli/` prints them and `report/`
-//! (future) turns them into tables and plots.
+//! ([`bench`]), the interleaved race against Embree ([`race`]), and the
+//! reports' measurements: the performance table ([`table`]), run time against
+//! error ([`convergence`]) and numerical stability ([`stability`]). Each
+//! returns a typed, serialisable report; `cli/` prints them and
+//! [`crate::report`] turns them into tables, plots and pages.
 
 pub mod bench;
 pub mod clock;
+pub mod convergence;
+pub mod machine;
+pub mod progress;
 pub mod race;
+pub mod stability;
+pub mod summary;
+pub mod table;
 
 pub use bench::{BenchOptions, BenchReport};
 pub use race::RaceReport;

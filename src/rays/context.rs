@@ -4,55 +4,14 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
+use crate::camera::Camera;
 use crate::geometry::{Primitives, Ray};
 
-/// A pinhole camera (vertical field of view, square pixels), used until a
-/// scene file supplies one.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PinholeCamera {
-    /// Eye position.
-    pub eye: Vec3,
-    /// Point looked at.
-    pub target: Vec3,
-    /// Up hint.
-    pub up: Vec3,
-    /// Vertical field of view in degrees.
-    pub fov_y_deg: f32,
-    /// Image width in pixels.
-    pub width: u32,
-    /// Image height in pixels.
-    pub height: u32,
-}
+/// The default point light of a mesh without a scene file (and of `bench`'s shadow rays).
+pub const DEFAULT_LIGHT: Vec3 = Vec3::new(-1.0, 1.0, -1.0);
 
-impl Default for PinholeCamera {
-    /// The project's default view of a mesh normalised to the unit sphere.
-    fn default() -> Self {
-        Self {
-            eye: Vec3::new(-0.964, 1.026, -2.649),
-            target: Vec3::ZERO,
-            up: Vec3::Y,
-            fov_y_deg: 50.0,
-            width: 800,
-            height: 800,
-        }
-    }
-}
-
-impl PinholeCamera {
-    /// The ray through continuous pixel position `(px, py)`, `(0, 0)` being
-    /// the top-left corner of the image (pixel centres at `+0.5`).
-    pub fn ray(&self, px: f32, py: f32) -> Ray {
-        let fwd = (self.target - self.eye).normalize();
-        let right = fwd.cross(self.up).normalize();
-        let up2 = right.cross(fwd);
-        let tan = (0.5 * self.fov_y_deg.to_radians()).tan();
-        let aspect = self.width as f32 / self.height as f32;
-        let ndc_x = 2.0 * px / self.width as f32 - 1.0;
-        let ndc_y = 1.0 - 2.0 * py / self.height as f32;
-        let d = (fwd + ndc_x * tan * aspect * right + ndc_y * tan * up2).normalize();
-        Ray::new(self.eye, d)
-    }
-}
+/// The default image size of a mesh without a scene file (the scene files' default).
+pub const DEFAULT_IMAGE: (u32, u32) = (800, 800);
 
 /// Camera rays by continuous pixel position.
 pub type CameraFn = Arc<dyn Fn(f32, f32) -> Ray + Send + Sync>;
@@ -73,16 +32,15 @@ pub struct RayContext {
 }
 
 impl RayContext {
-    /// The default camera and point light `(-1, 1, -1)` around `prims`
+    /// The default camera ([`Camera::default_view`]) and point light ([`DEFAULT_LIGHT`]) around `prims`
     /// (meant for meshes normalised to the unit sphere).
     pub fn with_defaults(prims: Arc<Primitives>) -> Self {
-        let cam = PinholeCamera::default();
-        let light = Vec3::new(-1.0, 1.0, -1.0);
+        let cam = Camera::default_view(DEFAULT_IMAGE.0, DEFAULT_IMAGE.1);
         Self {
             prims,
             camera: Arc::new(move |x, y| cam.ray(x, y)),
-            image: (cam.width, cam.height),
-            lights: vec![Arc::new(move |_, _| light)],
+            image: DEFAULT_IMAGE,
+            lights: vec![Arc::new(move |_, _| DEFAULT_LIGHT)],
         }
     }
 

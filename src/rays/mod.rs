@@ -10,11 +10,11 @@ pub mod sets;
 pub mod topology;
 pub mod workload;
 
-pub use context::{CameraFn, LightFn, PinholeCamera, RayContext};
+pub use context::{CameraFn, DEFAULT_IMAGE, DEFAULT_LIGHT, LightFn, RayContext};
 pub use rng::Rng;
 pub use sets::{RaySet, RayTag, SetKind, generate, scene_scale};
 pub use topology::Topology;
-pub use workload::{Camera, incoherent_rays, normalize_mesh, shadow_rays, surface_point};
+pub use workload::{incoherent_rays, shadow_rays};
 
 use std::path::Path;
 use std::sync::Arc;
@@ -22,19 +22,28 @@ use std::sync::Arc;
 use crate::error::{Error, Result};
 use crate::geometry::Primitives;
 
+/// An `.obj` mesh normalised to the unit sphere (mean of the vertices at the
+/// origin, farthest vertex at distance 1) by
+/// [`crate::geometry::normalize_to_unit_sphere`], the same function a scene's
+/// `"normalize": true` uses: `bench`, `parity`, `trace` and `render` trace the
+/// same vertices to the bit.
+pub fn load_normalized_mesh(path: &Path) -> Result<Arc<Primitives>> {
+    let mut mesh = crate::mesh::load_obj(path)?;
+    crate::geometry::normalize_to_unit_sphere(&mut mesh.positions);
+    if mesh.indices.is_empty() {
+        return Err(Error::file(path, "the mesh has no (non-degenerate) triangles"));
+    }
+    Ok(Arc::new(mesh.to_primitives()))
+}
+
 /// The scene a harness command runs on: a scene file (`.json`, through
 /// [`crate::scene::Scene::load`]: its primitives, camera, image size and
-/// lights), or an `.obj` mesh normalised to the unit sphere (mean of the
-/// vertices at the origin, farthest vertex at distance 1) with the default
-/// camera and point light.
+/// lights), or an `.obj` mesh normalised by [`load_normalized_mesh`] with the
+/// default camera and point light.
 pub fn load_context(path: &Path) -> Result<RayContext> {
     let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
     match ext.as_deref() {
-        Some("obj") => {
-            let mut mesh = crate::mesh::load_obj(path)?;
-            workload::normalise_to_unit_sphere(&mut mesh.positions);
-            Ok(RayContext::with_defaults(Arc::new(mesh.to_primitives())))
-        }
+        Some("obj") => Ok(RayContext::with_defaults(load_normalized_mesh(path)?)),
         Some("json") => {
             let scene = crate::scene::Scene::load(path)?;
             let camera = scene.camera.clone();
@@ -55,16 +64,14 @@ pub fn load_context(path: &Path) -> Result<RayContext> {
     }
 }
 
-/// Load the primitives of `path`: an `.obj` mesh directly, anything else as a scene file.
-/// With `normalize`, an OBJ mesh is centred on its vertex mean and scaled into the unit sphere.
+/// Load the primitives of `path`: an `.obj` mesh (with `normalize`, through
+/// [`load_normalized_mesh`]; otherwise as is), anything else as a scene file.
 pub fn load_primitives(path: &Path, normalize: bool) -> Result<Arc<Primitives>> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match ext.as_deref() {
+        Some("obj") if normalize => load_normalized_mesh(path),
         Some("obj") => {
-            let mut mesh = crate::mesh::load_obj(path)?;
-            if normalize {
-                normalize_mesh(&mut mesh);
-            }
+            let mesh = crate::mesh::load_obj(path)?;
             if mesh.indices.is_empty() {
                 return Err(Error::file(path, "the mesh has no (non-degenerate) triangles"));
             }

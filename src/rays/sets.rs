@@ -12,8 +12,8 @@ use std::sync::Arc;
 use glam::{DVec3, Vec3};
 
 use crate::accel::Tracer;
-use crate::geometry::offset::{offset_origin, sphere_point_error, triangle_point_error};
-use crate::geometry::{Aabb, Hit, Primitives, Ray};
+use crate::geometry::offset::SpawnOffset;
+use crate::geometry::{Aabb, Primitives, Ray};
 
 use super::{RayContext, Rng, Topology};
 
@@ -203,23 +203,6 @@ fn ray_towards(rng: &mut Rng, p: Vec3, radius: f32) -> Ray {
     Ray::new(p - dist * d, d)
 }
 
-/// The hit point of `hit` on `ray`, its error bound and geometric normal.
-fn hit_frame(prims: &Primitives, ray: &Ray, hit: &Hit) -> (Vec3, Vec3, Vec3) {
-    let nt = prims.triangles.len();
-    if (hit.prim as usize) < nt {
-        let t = prims.triangles[hit.prim as usize];
-        let b = [1.0 - hit.u - hit.v, hit.u, hit.v];
-        let p = b[0] * t.v[0] + b[1] * t.v[1] + b[2] * t.v[2];
-        (p, triangle_point_error(b, t.v), t.normal())
-    } else {
-        let s = prims.spheres[hit.prim as usize - nt];
-        // Reproject onto the sphere (pbrt-v4, section 6.8.5).
-        let q = ray.at(hit.t) - s.center;
-        let p = s.center + q * (s.radius / q.length());
-        (p, sphere_point_error(p), q)
-    }
-}
-
 /// Generate set `kind` with `count` rays (the `scaled` kind returns three
 /// sets, one per transformed scene, `count / 3` rays each). `oracle` must
 /// trace `ctx.prims`; `oracle_for` builds an oracle for the transformed
@@ -294,13 +277,13 @@ fn generate_one(ctx: &RayContext, kind: SetKind, name: String, seed: u64, count:
                 attempts += 1;
                 let r = camera_ray(&mut rng);
                 let Some(hit) = oracle.intersect(&r) else { continue };
-                let (p, err, n) = hit_frame(prims, &r, &hit);
+                let si = prims.interaction(&r, &hit);
+                let (p, n) = (si.p, si.ng);
                 if kind == SetKind::Shadow {
                     let light = &ctx.lights[rng.below(ctx.lights.len())];
                     let lp = light(rng.f32(), rng.f32());
-                    let o = offset_origin(p, err, n, lp - p);
                     // Up to the light point (which is not geometry): t in [0, 1].
-                    rays.push(Ray::with_range(o, lp - o, 0.0, 1.0));
+                    rays.push(si.spawn_ray_to(SpawnOffset::Robust, lp, 1.0));
                     tags.push(RayTag::Shadow { prim: hit.prim, from: p });
                 } else {
                     // Half the rays leave on the side they arrived from
@@ -311,8 +294,7 @@ fn generate_one(ctx: &RayContext, kind: SetKind, name: String, seed: u64, count:
                     if w.dot(n) * side < 0.0 {
                         w = -w;
                     }
-                    let o = offset_origin(p, err, n, w);
-                    rays.push(Ray::new(o, w));
+                    rays.push(Ray::new(si.spawn_origin(SpawnOffset::Robust, w), w));
                     tags.push(RayTag::Spawned { prim: hit.prim, from: p });
                 }
             }
@@ -400,8 +382,8 @@ fn generate_one(ctx: &RayContext, kind: SetKind, name: String, seed: u64, count:
 mod tests {
     use super::*;
     use crate::accel::BruteForce;
+    use crate::camera::Camera;
     use crate::geometry::{Triangle, TriangleTest};
-    use crate::rays::PinholeCamera;
 
     /// A closed tetrahedron (every edge shared, every vertex fan closed).
     fn tetra() -> Arc<Primitives> {
@@ -480,9 +462,9 @@ mod tests {
 
     #[test]
     fn camera_centre_ray_looks_at_the_target() {
-        let c = PinholeCamera::default();
+        let c = Camera::default_view(800, 800);
         let r = c.ray(400.0, 400.0);
-        let want = (c.target - c.eye).normalize();
+        let want = (Vec3::ZERO - c.position).normalize();
         assert!(r.dir.dot(want) > 1.0 - 1e-6);
         // Top-left pixel looks up and to the left of the view direction.
         let tl = c.ray(0.5, 0.5);

@@ -61,10 +61,10 @@ impl Default for CameraSpec {
     /// The course's default view: 3 units from the origin, rotated 20 degrees about x and y.
     fn default() -> Self {
         Self {
-            position: Vec3::new(-0.964_181, 1.026_06, -2.649_067),
+            position: crate::camera::DEFAULT_EYE,
             look_at: Vec3::ZERO,
             up: Vec3::Y,
-            fov: 50.0,
+            fov: crate::camera::DEFAULT_FOV,
             aperture: 0.0,
             focus_distance: None,
         }

@@ -1,6 +1,7 @@
 //! Scenes: loading a scene file into the primitives, shading data, lights and
 //! camera that the renderer and every tracer use.
 
+pub mod export;
 pub mod file;
 
 use std::collections::HashMap;
@@ -118,7 +119,17 @@ impl Scene {
 
     /// Load a scene file and apply command-line overrides.
     pub fn load_with(path: &Path, ov: &Overrides) -> Result<Self> {
-        let mut file = read_scene_file(path)?;
+        Self::from_file_with(read_scene_file(path)?, path, ov)
+    }
+
+    /// Read a scene file without building the scene (errors name `path`).
+    pub fn read_file(path: &Path) -> Result<SceneFile> {
+        read_scene_file(path)
+    }
+
+    /// Build a scene from a parsed file that lives at `path` (relative paths
+    /// resolve against its folder), with command-line overrides applied.
+    pub fn from_file_with(mut file: SceneFile, path: &Path, ov: &Overrides) -> Result<Self> {
         if let Some(w) = ov.width {
             file.image.width = w;
         }
@@ -339,9 +350,10 @@ impl Scene {
     /// Material index of primitive `prim`.
     #[inline]
     pub fn material_of(&self, prim: u32) -> u32 {
-        let nt = self.triangle_shading.len();
-        let i = prim as usize;
-        if i < nt { self.triangle_shading[i].material } else { self.sphere_materials[i - nt] }
+        match self.prims.sphere_index(prim as usize) {
+            None => self.triangle_shading[prim as usize].material,
+            Some(s) => self.sphere_materials[s],
+        }
     }
 
     /// Decide once what this render needs (see [`Plan`]).
@@ -378,11 +390,8 @@ impl Scene {
 
 /// Normalise (optionally) and transform a mesh in place, normals included.
 fn place_mesh(mesh: &mut Mesh, spec: &file::MeshSpec) {
-    if spec.normalize && !mesh.positions.is_empty() {
-        let center = mesh.positions.iter().copied().sum::<Vec3>() / mesh.positions.len() as f32;
-        let radius = mesh.positions.iter().map(|p| (*p - center).length()).fold(0.0f32, f32::max);
-        let s = if radius > 0.0 { 1.0 / radius } else { 1.0 };
-        mesh.map_positions(|p| (p - center) * s);
+    if spec.normalize {
+        crate::geometry::normalize_to_unit_sphere(&mut mesh.positions);
     }
     if let Some(t) = &spec.transform {
         let r = t.rotate * (std::f32::consts::PI / 180.0);

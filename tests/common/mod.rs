@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 use rtdiff::accel::{self, AccelConfig, Builder, Traversal};
 use rtdiff::film::Image;
-use rtdiff::geometry::{Primitives, Ray, Sphere, Triangle};
+use rtdiff::geometry::{Prim, Primitives, Ray, Sphere, Triangle};
 use rtdiff::mesh::{Mesh, load_obj};
 use rtdiff::render::{RenderOptions, RenderResult, render};
 use rtdiff::rng::Pcg32;
@@ -226,17 +226,16 @@ pub fn icosphere(levels: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
 
 /// A random point on primitive `i` (triangle: uniform barycentrics; sphere: uniform on the surface).
 pub fn point_on(prims: &Primitives, i: usize, rng: &mut Pcg32) -> Vec3 {
-    let nt = prims.triangles.len();
-    if i < nt {
-        let (mut a, mut b) = (rng.next_f32(), rng.next_f32());
-        if a + b > 1.0 {
-            (a, b) = (1.0 - a, 1.0 - b);
+    match prims.get(i) {
+        Prim::Triangle(t) => {
+            let (mut a, mut b) = (rng.next_f32(), rng.next_f32());
+            if a + b > 1.0 {
+                (a, b) = (1.0 - a, 1.0 - b);
+            }
+            let v = t.v;
+            v[0] + a * (v[1] - v[0]) + b * (v[2] - v[0])
         }
-        let v = prims.triangles[i].v;
-        v[0] + a * (v[1] - v[0]) + b * (v[2] - v[0])
-    } else {
-        let s = prims.spheres[i - nt];
-        s.center + s.radius * rng.unit_vector()
+        Prim::Sphere(s) => s.center + s.radius * rng.unit_vector(),
     }
 }
 

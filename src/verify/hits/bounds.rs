@@ -30,7 +30,7 @@
 
 use glam::DVec3;
 
-use crate::geometry::{Hit, Primitives, Ray};
+use crate::geometry::{Hit, Prim, Primitives, Ray};
 
 /// `K` of the module documentation: how many unit roundings the difference
 /// of two correct tracers may accumulate.
@@ -46,16 +46,17 @@ pub(crate) struct HitGeom {
 }
 
 pub(crate) fn hit_geom(prims: &Primitives, ray: &Ray, h: &Hit) -> HitGeom {
-    let nt = prims.triangles.len();
-    if (h.prim as usize) < nt {
-        let [a, b, c] = prims.triangles[h.prim as usize].v.map(|p| p.as_dvec3());
-        let nn = (b - a).cross(c - a);
-        let longest = (b - a).length().max((c - b).length()).max((a - c).length());
-        HitGeom { n: nn.normalize_or_zero(), longest, double_area: nn.length(), is_triangle: true }
-    } else {
-        let s = prims.spheres[h.prim as usize - nt];
-        let n = (ray.at(h.t).as_dvec3() - s.center.as_dvec3()).normalize_or_zero();
-        HitGeom { n, longest: 0.0, double_area: 0.0, is_triangle: false }
+    match prims.get(h.prim as usize) {
+        Prim::Triangle(t) => {
+            let [a, b, c] = t.v.map(|p| p.as_dvec3());
+            let nn = (b - a).cross(c - a);
+            let longest = (b - a).length().max((c - b).length()).max((a - c).length());
+            HitGeom { n: nn.normalize_or_zero(), longest, double_area: nn.length(), is_triangle: true }
+        }
+        Prim::Sphere(s) => {
+            let n = (ray.at(h.t).as_dvec3() - s.center.as_dvec3()).normalize_or_zero();
+            HitGeom { n, longest: 0.0, double_area: 0.0, is_triangle: false }
+        }
     }
 }
 

@@ -358,12 +358,4 @@ mod tests {
             compare("dropper", &set, Answers { hits: &nh, occluded: &none }, Answers { hits: &rh, occluded: &none }, 5);
         assert_eq!((s.leaks, s.classes.get("leak")), (1, Some(&1)));
     }
-
-    #[test]
-    fn normalised_mesh_fits_the_unit_sphere() {
-        let mut p = vec![Vec3::new(10.0, 0.0, 0.0), Vec3::new(12.0, 0.0, 0.0), Vec3::new(11.0, 3.0, 0.0)];
-        crate::rays::workload::normalise_to_unit_sphere(&mut p);
-        let m = p.iter().map(|v| v.length()).fold(0.0, f32::max);
-        assert!((m - 1.0).abs() < 1e-6);
-    }
 }

@@ -1,0 +1,262 @@
+//! `rtdiff report perf|convergence|stability|all`: run the measurements and
+//! write their files into one folder.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use serde::Serialize;
+
+use super::html::{Figure, PictureRow, Section};
+use super::table::fmt_num;
+use crate::error::{Error, Result};
+use crate::perf::convergence::{ConvergenceOptions, ConvergenceReport};
+use crate::perf::stability::{StabilityOptions, StabilityReport};
+use crate::perf::table::{PerfOptions, PerfReport};
+
+/// Which report to make.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ReportKind {
+    /// The reports' performance table.
+    Perf,
+    /// Run time against error.
+    Convergence,
+    /// Leaks and self-intersections against mesh scale and offset.
+    Stability,
+    /// All three and `index.html`.
+    All,
+}
+
+/// How to make it.
+#[derive(Clone, Debug)]
+pub struct ReportOptions {
+    /// Which report.
+    pub kind: ReportKind,
+    /// Output folder.
+    pub out: PathBuf,
+    /// The project root (scenes are read from `root/scenes`).
+    pub root: PathBuf,
+    /// Small sizes and few runs (CI).
+    pub quick: bool,
+    /// Runs per performance figure (default: 3).
+    pub runs: Option<usize>,
+    /// Image size of the performance table (default: 800, 64 with `quick`).
+    pub size: Option<u32>,
+    /// No progress bars.
+    pub quiet: bool,
+}
+
+/// What was written.
+#[derive(Clone, Debug)]
+pub struct Generated {
+    /// Every file written.
+    pub files: Vec<PathBuf>,
+    /// The Markdown of the reports made.
+    pub markdown: String,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+}
+
+fn write(path: &Path, text: &str, files: &mut Vec<PathBuf>) -> Result<()> {
+    std::fs::write(path, text).map_err(|e| Error::file(path, format!("cannot write: {e}")))?;
+    files.push(path.to_path_buf());
+    Ok(())
+}
+
+fn write_json<T: Serialize>(path: &Path, v: &T, files: &mut Vec<PathBuf>) -> Result<()> {
+    let s = serde_json::to_string_pretty(v).map_err(|e| Error::file(path, format!("cannot serialise: {e}")))?;
+    write(path, &s, files)
+}
+
+fn rel(dir: &Path, p: &Path) -> String {
+    p.strip_prefix(dir).unwrap_or(p).to_string_lossy().replace('\\', "/")
+}
+
+fn command(part: &str, opts: &ReportOptions) -> String {
+    let mut c = format!("rtdiff report {part} -o {}", opts.out.display());
+    if opts.quick {
+        c.push_str(" --quick");
+    }
+    if let Some(r) = opts.runs {
+        c.push_str(&format!(" --runs {r}"));
+    }
+    if let Some(s) = opts.size {
+        c.push_str(&format!(" --size {s}"));
+    }
+    c
+}
+
+/// Run the report(s) `opts.kind` asks for and write them into `opts.out`.
+pub fn generate(opts: &ReportOptions) -> Result<Generated> {
+    let start = Instant::now();
+    let dir = &opts.out;
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, &e))?;
+    let all = opts.kind == ReportKind::All;
+    let mut files = Vec::new();
+    let mut markdown = String::new();
+    let mut sections = Vec::new();
+    let mut machine = None;
+    if all || opts.kind == ReportKind::Perf {
+        let mut po = if opts.quick { PerfOptions::quick(&opts.root) } else { PerfOptions::full(&opts.root) };
+        po.runs = opts.runs.unwrap_or(po.runs);
+        po.size = opts.size.unwrap_or(po.size);
+        po.quiet = opts.quiet;
+        let r = crate::perf::table::run(&po)?;
+        machine = Some(super::perf::machine_table(&r.machine));
+        sections.push(perf_files(&r, opts, &mut files, &mut markdown)?);
+    }
+    if all || opts.kind == ReportKind::Convergence {
+        let mut co =
+            if opts.quick { ConvergenceOptions::quick(&opts.root) } else { ConvergenceOptions::full(&opts.root) };
+        co.images = Some(dir.join("images"));
+        co.quiet = opts.quiet;
+        let r = crate::perf::convergence::run(&co)?;
+        sections.push(convergence_files(&r, opts, &mut files, &mut markdown)?);
+    }
+    if all || opts.kind == ReportKind::Stability {
+        let mut so = if opts.quick { StabilityOptions::quick(&opts.root) } else { StabilityOptions::full(&opts.root) };
+        so.quiet = opts.quiet;
+        let r = crate::perf::stability::run(&so)?;
+        sections.push(stability_files(&r, opts, &mut files, &mut markdown)?);
+    }
+    if all {
+        let header: Vec<_> = machine.into_iter().collect();
+        let page = super::html::page("rtdiff report", &header, &sections);
+        write(&dir.join("index.html"), &page, &mut files)?;
+        write(&dir.join("report.md"), &format!("# rtdiff report\n\n{markdown}"), &mut files)?;
+    }
+    Ok(Generated { files, markdown, seconds: start.elapsed().as_secs_f64() })
+}
+
+fn perf_files(r: &PerfReport, opts: &ReportOptions, files: &mut Vec<PathBuf>, md: &mut String) -> Result<Section> {
+    let dir = &opts.out;
+    let text = super::perf::perf_markdown(r);
+    write_json(&dir.join("perf.json"), r, files)?;
+    write(&dir.join("perf.md"), &text, files)?;
+    let svg = dir.join("perf.svg");
+    super::perf::perf_plot(r, &svg)?;
+    files.push(svg.clone());
+    md.push_str(&text);
+    md.push('\n');
+    Ok(Section {
+        id: "perf".into(),
+        title: "Performance".into(),
+        intro: "The reports' performance table (\"Performance Test\" in ../shared/seeds/), measured on this machine, \
+                with the reports' published figures beside it."
+            .into(),
+        tables: vec![super::perf::perf_table(r)],
+        figures: vec![Figure {
+            file: rel(dir, &svg),
+            caption: "Render time per builder/traversal and scene: rtdiff's median with its min-max (filled) and \
+                      the reports' figure (hollow)."
+                .into(),
+        }],
+        pictures: Vec::new(),
+        command: command("perf", opts),
+        data: vec!["perf.json".into(), "perf.md".into()],
+    })
+}
+
+fn convergence_files(
+    r: &ConvergenceReport,
+    opts: &ReportOptions,
+    files: &mut Vec<PathBuf>,
+    md: &mut String,
+) -> Result<Section> {
+    let dir = &opts.out;
+    let text = super::convergence::convergence_markdown(r);
+    write_json(&dir.join("convergence.json"), r, files)?;
+    write(&dir.join("convergence.md"), &text, files)?;
+    let plots = super::convergence::convergence_plots(r, dir)?;
+    md.push_str(&text);
+    md.push('\n');
+    let captions = [
+        "relMSE against samples per feature (solid) with the fitted power law (dashed).",
+        "relMSE against render time: the time to reach an error (dashed: the target).",
+        "Mean LDR-FLIP against samples.",
+    ];
+    let figures = plots.iter().zip(captions).map(|(p, c)| Figure { file: rel(dir, p), caption: c.into() }).collect();
+    files.extend(plots);
+    let mut pictures = Vec::new();
+    for c in &r.curves {
+        let Some(s) = &c.images else { continue };
+        let img = |f: &str| format!("images/{f}");
+        for f in [&s.render, &s.reference, &s.difference, &s.flip_map] {
+            files.push(dir.join("images").join(f));
+        }
+        let p = c.points.iter().find(|p| p.samples == s.samples);
+        pictures.push(PictureRow {
+            title: format!("{}: {} samples against the reference", c.feature_name(), s.samples),
+            render_label: format!("rtdiff, {} samples", s.samples),
+            render: img(&s.render),
+            reference_label: format!("reference: rtdiff, {} samples", r.reference_count),
+            reference: img(&s.reference),
+            difference: (img(&s.difference), format!("|difference|, full scale {}", fmt_num(f64::from(s.diff_scale)))),
+            flip: (img(&s.flip_map), "FLIP map (LDR)".into()),
+            metrics: p.map_or_else(String::new, |p| {
+                format!(
+                    "relMSE {}, mean FLIP {}, {} ms. Scene {} ({}).",
+                    fmt_num(p.rel_mse),
+                    fmt_num(p.flip),
+                    fmt_num(p.ms),
+                    c.scene,
+                    c.setup
+                )
+            }),
+        });
+    }
+    Ok(Section {
+        id: "convergence".into(),
+        title: "Convergence (time against error)".into(),
+        intro: format!(
+            "Each noisy feature swept over sample counts; errors against a converged rtdiff render ({} samples, \
+             independent seed). Mitsuba: {}",
+            r.reference_count, r.mitsuba
+        ),
+        tables: super::convergence::convergence_tables(r),
+        figures,
+        pictures,
+        command: command("convergence", opts),
+        data: vec!["convergence.json".into(), "convergence.md".into()],
+    })
+}
+
+fn stability_files(
+    r: &StabilityReport,
+    opts: &ReportOptions,
+    files: &mut Vec<PathBuf>,
+    md: &mut String,
+) -> Result<Section> {
+    let dir = &opts.out;
+    let text = super::stability::stability_markdown(r);
+    write_json(&dir.join("stability.json"), r, files)?;
+    write(&dir.join("stability.md"), &text, files)?;
+    let plots = super::stability::stability_plots(r, dir)?;
+    md.push_str(&text);
+    md.push('\n');
+    let figures = plots
+        .iter()
+        .map(|p| Figure {
+            file: rel(dir, p),
+            caption: format!(
+                "{}: per million rays, {} / {} / {}.",
+                p.file_stem().and_then(|s| s.to_str()).unwrap_or_default(),
+                r.tracers[0],
+                r.tracers[1],
+                r.tracers[2]
+            ),
+        })
+        .collect();
+    files.extend(plots);
+    Ok(Section {
+        id: "stability".into(),
+        title: "Numerical stability".into(),
+        intro: "parity's stress report on each mesh scaled and moved: leaks through shared edges and vertices, and \
+                false self-intersections of rays leaving a surface (robust offset, and the reports' fixed 1e-4)."
+            .into(),
+        tables: super::stability::stability_tables(r),
+        figures,
+        pictures: Vec::new(),
+        command: command("stability", opts),
+        data: vec!["stability.json".into(), "stability.md".into()],
+    })
+}

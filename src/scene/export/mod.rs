@@ -1,0 +1,6 @@
+//! Exporters: a loaded scene written for another renderer, so that both
+//! renderers see the same float32 triangles, textures, lights and camera.
+
+pub mod mitsuba;
+
+pub use mitsuba::{ExportReport, export_mitsuba};
