@@ -26,10 +26,12 @@ fn mesh(name: &str) -> Arc<Primitives> {
 #[test]
 fn dragon_res3_grazing_ray() {
     let prims = mesh("dragon_res3.obj");
-    let ray = Ray::new(
-        Vec3::new(0.032898638397455215, 0.10417373478412628, 0.39105263352394104),
-        Vec3::new(0.045490823686122894, -0.07154779136180878, -0.9963992238044739),
-    );
+    // origin 0.032898638397455215, 0.10417373478412628, 0.39105263352394104,
+    // direction 0.045490823686122894, -0.07154779136180878, -0.9963992238044739 (the decimals).
+    let ray = parse_replay_line(
+        "0x1.0d8172p-5 0x1.aab214p-4 0x1.90701ap-2 0x1.74a92cp-5 -0x1.250f4cp-4 -0x1.fe280ap-1 0x0p+0 inf",
+    )
+    .unwrap();
     let line = replay_line(&ray);
     assert_eq!(parse_replay_line(&line).map(|r| format!("{r:?}")), Some(format!("{ray:?}")));
     let arb = Arbiter::new(prims.clone());

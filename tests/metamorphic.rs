@@ -40,7 +40,7 @@ const EXACT_SAMPLE: usize = 150;
 fn quantised_mesh(name: &str) -> Arc<Primitives> {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets").join(name);
     let mut mesh = rtdiff::mesh::load_obj(&path).unwrap_or_else(|e| panic!("{e} (run scripts/fetch-assets.sh)"));
-    rtdiff::rays::workload::normalise_to_unit_sphere(&mut mesh.positions);
+    rtdiff::geometry::normalize::normalize_to_unit_sphere(&mut mesh.positions);
     for p in &mut mesh.positions {
         *p = (*p * 4096.0).round() / 4096.0;
     }
@@ -266,9 +266,9 @@ fn check_mesh(name: &str) {
             }
             // The arbiter's exact answers transform exactly.
             if tf.exact_map {
-                for i in 0..EXACT_SAMPLE.min(rays.len()) {
-                    let t0 = base_arb.truth(&set.rays[i]);
-                    let t1 = arb.truth(&rays[i]);
+                for (i, (r0, r1)) in set.rays.iter().zip(&rays).enumerate().take(EXACT_SAMPLE) {
+                    let t0 = base_arb.truth(r0);
+                    let t1 = arb.truth(r1);
                     let mut mapped: Vec<u32> = t1.prims.iter().map(|&p| (tf.back)(p)).collect();
                     mapped.sort_unstable();
                     mapped.dedup();

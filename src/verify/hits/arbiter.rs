@@ -44,7 +44,9 @@
 //!   larger of `tb` and twice the watertight test's own error bound on `t`,
 //!   pbrt-v4 6.8.7, below which that test refuses a hit by design),
 //! - for every other primitive, how far it is from being hit in front of the
-//!   answer: the larger of `-min barycentric / bb` and `(t - t*) / tb`.
+//!   answer: the larger of `-min barycentric / bb` and `(t - t*) / tb` (with
+//!   the larger of the two primitives' `tb`: two computed distances can come
+//!   out in either order when they differ by less than either's error).
 //!
 //! A tracer's answer is [`Verdict::Exact`] when it is one of the exact
 //! answer's primitives (or both miss); [`Verdict::WithinBound`] when it is
@@ -434,19 +436,23 @@ impl Arbiter {
     }
 
     /// How many units it takes to hit `e` in front of `t_star` (or anywhere in
-    /// the interval when `t_star` is the far end).
-    fn reachable(&self, ray: &Ray, e: &Exact, t_star: f64) -> f64 {
+    /// the interval when `t_star` is the far end), whose own unit `t` bound
+    /// is `tb_star`: two computed distances may come out in either order when
+    /// they differ by less than the larger of their bounds.
+    fn reachable(&self, ray: &Ray, e: &Exact, t_star: f64, tb_star: f64) -> f64 {
         if e.t.is_none() {
             return f64::INFINITY;
         }
         let outside = -e.inside_margin(self.is_triangle(e.prim));
-        let behind = (e.t_f64 - t_star) / e.tb;
+        let behind = (e.t_f64 - t_star) / e.tb.max(tb_star);
         let before = (ray.t_min as f64 - e.t_f64) / self.t_min_bound(ray, e);
         outside.max(behind).max(before).max(0.0)
     }
 
     fn margin(&self, ray: &Ray, truth: &Truth) -> f64 {
         let t_star = truth.t_f64().unwrap_or(ray.t_max as f64);
+        let tb_star =
+            truth.candidates.iter().filter(|e| truth.prims.contains(&e.prim)).map(|e| e.tb).fold(0.0, f64::max);
         let mut m = f64::INFINITY;
         if truth.t.is_some() {
             // The answer survives if any of its tied primitives does.
@@ -458,7 +464,7 @@ impl Arbiter {
                 .fold(0.0, f64::max);
         }
         for e in truth.candidates.iter().filter(|e| !truth.prims.contains(&e.prim)) {
-            m = m.min(self.reachable(ray, e, t_star));
+            m = m.min(self.reachable(ray, e, t_star, tb_star));
         }
         m
     }
@@ -478,15 +484,17 @@ impl Arbiter {
         // only if each can be missed on its own: a ray through a shared edge
         // that misses both neighbours (a leak) is not judged wrong here, the
         // leak check of crossing rays catches it.
-        let (mut need, t_answer) = match answer {
-            None => (0.0, f64::INFINITY),
+        let (mut need, t_answer, tb_answer) = match answer {
+            None => (0.0, f64::INFINITY, 0.0),
             Some(p) => {
                 let e = truth.candidates.iter().find(|e| e.prim == p).cloned().unwrap_or_else(|| self.evaluate(ray, p));
-                (self.reachable(ray, &e, ray.t_max as f64), if e.t_f64.is_nan() { f64::INFINITY } else { e.t_f64 })
+                let t = if e.t_f64.is_nan() { f64::INFINITY } else { e.t_f64 };
+                (self.reachable(ray, &e, ray.t_max as f64, 0.0), t, e.tb)
             }
         };
         for e in truth.candidates.iter().filter(|e| e.hit && e.t_f64 <= t_answer && Some(e.prim) != answer) {
-            let misorder = if t_answer.is_finite() { (t_answer - e.t_f64) / e.tb } else { f64::INFINITY };
+            let misorder =
+                if t_answer.is_finite() { (t_answer - e.t_f64) / e.tb.max(tb_answer) } else { f64::INFINITY };
             need = f64::max(need, self.missable(ray, e).min(misorder));
         }
         if need <= K_TRACER { Verdict::WithinBound } else { Verdict::Wrong }
