@@ -9,6 +9,7 @@ pub mod accel;
 pub mod bvh;
 pub mod camera;
 pub mod cli;
+pub mod debug;
 #[cfg(feature = "embree")]
 pub mod embree;
 pub mod error;

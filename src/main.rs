@@ -14,7 +14,7 @@ struct Cli {
 enum Command {
     /// Render a scene file to a PNG or EXR image.
     Render(rtdiff::cli::render::RenderArgs),
-    /// Trace one pixel and print every ray it causes (headless visual debugging).
+    /// Visual debugging: one pixel's ray tree, overlays drawn over the render, heatmaps.
     Debug(rtdiff::cli::debug::DebugArgs),
     /// Print BVH statistics (nodes, leaves, levels, leaf sizes, SAH cost, memory, build time) per builder.
     BvhStats(rtdiff::cli::bvh_stats::BvhStatsArgs),

@@ -52,9 +52,11 @@ fn pixel_offset(s: u32, spp: u32, rng: &mut Pcg32) -> (f32, f32) {
     }
 }
 
-/// Render one pixel.
+/// Render one pixel: the pixel's own random stream, its camera (and lens)
+/// samples, averaged. Public for tools that must trace exactly the render's
+/// rays (the heatmaps of [`crate::debug`]).
 #[inline]
-fn render_pixel(scene: &Scene, integ: &dyn Integrator, plan: &Plan, x: u32, y: u32, c: &mut Counters) -> Vec3 {
+pub fn render_pixel(scene: &Scene, integ: &dyn Integrator, plan: &Plan, x: u32, y: u32, c: &mut Counters) -> Vec3 {
     let mut rng = Pcg32::for_pixel(scene.seed, x, y);
     let mut sum = Vec3::ZERO;
     for s in 0..scene.spp {
@@ -75,24 +77,42 @@ fn render_pixel(scene: &Scene, integ: &dyn Integrator, plan: &Plan, x: u32, y: u
     sum / scene.spp as f32
 }
 
+/// A progress bar over `rows` image rows on stderr (hidden when `quiet`;
+/// indicatif also hides it when stderr is not a terminal).
+pub fn progress_bar(rows: u64, quiet: bool, msg: &'static str) -> indicatif::ProgressBar {
+    if quiet {
+        return indicatif::ProgressBar::hidden();
+    }
+    let b = indicatif::ProgressBar::with_draw_target(Some(rows), indicatif::ProgressDrawTarget::stderr());
+    if let Ok(style) = indicatif::ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} rows, {eta} left") {
+        b.set_style(style.progress_chars("=> "));
+    }
+    b.set_message(msg);
+    b
+}
+
+/// Run `work` on a pool of `threads` workers (None: the global pool of all cores).
+pub fn with_threads<T: Send>(threads: Option<usize>, work: impl FnOnce() -> T + Send) -> Result<T> {
+    match threads {
+        Some(0) => Err(Error::Invalid("--threads must be at least 1".into())),
+        Some(n) => Ok(rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .map_err(|e| Error::Invalid(format!("cannot start {n} threads: {e}")))?
+            .install(work)),
+        None => Ok(work()),
+    }
+}
+
 /// Render `scene` with hits from `tracer`.
 pub fn render(scene: &Scene, tracer: &dyn Tracer, opts: &RenderOptions) -> Result<RenderResult> {
     let plan = scene.plan();
     let integ = Whitted::new(scene, tracer, plan);
     let (w, h) = (scene.width, scene.height);
-    let bar = if opts.quiet {
-        indicatif::ProgressBar::hidden()
-    } else {
-        let b = indicatif::ProgressBar::with_draw_target(Some(h as u64), indicatif::ProgressDrawTarget::stderr());
-        if let Ok(style) = indicatif::ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} rows, {eta} left") {
-            b.set_style(style.progress_chars("=> "));
-        }
-        b.set_message("rendering");
-        b
-    };
+    let bar = progress_bar(h as u64, opts.quiet, "rendering");
     let mut image = Image::new(w, h);
     let start = Instant::now();
-    let mut work = || {
+    let work = || {
         image
             .pixels
             .par_chunks_mut(w as usize)
@@ -107,15 +127,7 @@ pub fn render(scene: &Scene, tracer: &dyn Tracer, opts: &RenderOptions) -> Resul
             })
             .collect::<Vec<Counters>>()
     };
-    let rows = match opts.threads {
-        Some(0) => return Err(Error::Invalid("--threads must be at least 1".into())),
-        Some(n) => rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build()
-            .map_err(|e| Error::Invalid(format!("cannot start {n} threads: {e}")))?
-            .install(work),
-        None => work(),
-    };
+    let rows = with_threads(opts.threads, work)?;
     let seconds = start.elapsed().as_secs_f64();
     bar.finish_and_clear();
     let mut counters = Counters::default();

@@ -17,6 +17,7 @@ pub mod build_median;
 pub mod build_sah;
 pub mod build_sah_volume;
 pub mod collapse;
+pub mod count;
 pub mod node;
 pub mod packet;
 pub mod prims;
@@ -30,6 +31,7 @@ pub mod traverse_sorted_vector;
 pub mod wide;
 
 pub use build::BinaryBvh;
+pub use count::{Count, TraversalCounts, VisitLog};
 pub use node::Node;
 pub use prims::LeafPrims;
 pub use stats::BvhStats;
@@ -109,42 +111,79 @@ fn kebab<T: clap::ValueEnum>(v: &T) -> String {
     v.to_possible_value().map_or_else(String::new, |p| p.get_name().to_string())
 }
 
+impl BvhTracer {
+    /// The binary tree walked by the reports' traversals (None for `fast`).
+    pub fn binary(&self) -> Option<&BinaryBvh> {
+        match &self.tree {
+            Tree::Binary(b) => Some(b),
+            Tree::Wide(_) => None,
+        }
+    }
+
+    /// The 8-wide tree walked by the `fast` traversal (None otherwise).
+    pub fn wide(&self) -> Option<&WideBvh> {
+        match &self.tree {
+            Tree::Wide(w) => Some(w),
+            Tree::Binary(_) => None,
+        }
+    }
+
+    /// [`Tracer::intersect`] reporting the ray and the traversal's work to
+    /// `counts` (the same traversal code; `()` counts nothing).
+    #[inline]
+    pub fn intersect_with<C: Count>(&self, ray: &Ray, counts: &mut C) -> Option<Hit> {
+        counts.ray();
+        let t = self.test;
+        match &self.tree {
+            Tree::Wide(w) => w.intersect_counting(ray, t, counts),
+            Tree::Binary(b) => match self.traversal {
+                Traversal::Basic | Traversal::Fast => traverse_basic::intersect_counting(b, ray, t, counts),
+                Traversal::PriorityQueue => {
+                    traverse_ordered::intersect_counting::<traverse_priority_queue::HeapFrontier, C>(b, ray, t, counts)
+                }
+                Traversal::SortedVector => {
+                    traverse_ordered::intersect_counting::<traverse_sorted_vector::SortedFrontier, C>(b, ray, t, counts)
+                }
+                Traversal::NthElement => {
+                    traverse_ordered::intersect_counting::<traverse_nth_element::NthFrontier, C>(b, ray, t, counts)
+                }
+            },
+        }
+    }
+
+    /// [`Tracer::occluded`] reporting the ray and the traversal's work to `counts`.
+    #[inline]
+    pub fn occluded_with<C: Count>(&self, ray: &Ray, counts: &mut C) -> bool {
+        counts.ray();
+        let t = self.test;
+        match &self.tree {
+            Tree::Wide(w) => w.occluded_counting(ray, t, counts),
+            Tree::Binary(b) => match self.traversal {
+                Traversal::Basic | Traversal::Fast => traverse_basic::occluded_counting(b, ray, t, counts),
+                Traversal::PriorityQueue => {
+                    traverse_ordered::occluded_counting::<traverse_priority_queue::HeapFrontier, C>(b, ray, t, counts)
+                }
+                Traversal::SortedVector => {
+                    traverse_ordered::occluded_counting::<traverse_sorted_vector::SortedFrontier, C>(b, ray, t, counts)
+                }
+                Traversal::NthElement => {
+                    traverse_ordered::occluded_counting::<traverse_nth_element::NthFrontier, C>(b, ray, t, counts)
+                }
+            },
+        }
+    }
+}
+
 impl Tracer for BvhTracer {
     fn name(&self) -> String {
         format!("bvh-{}/{}", kebab(&self.builder), kebab(&self.traversal))
     }
 
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        let t = self.test;
-        match &self.tree {
-            Tree::Wide(w) => w.intersect(ray, t),
-            Tree::Binary(b) => match self.traversal {
-                Traversal::Basic | Traversal::Fast => traverse_basic::intersect(b, ray, t),
-                Traversal::PriorityQueue => {
-                    traverse_ordered::intersect::<traverse_priority_queue::HeapFrontier>(b, ray, t)
-                }
-                Traversal::SortedVector => {
-                    traverse_ordered::intersect::<traverse_sorted_vector::SortedFrontier>(b, ray, t)
-                }
-                Traversal::NthElement => traverse_ordered::intersect::<traverse_nth_element::NthFrontier>(b, ray, t),
-            },
-        }
+        self.intersect_with(ray, &mut ())
     }
 
     fn occluded(&self, ray: &Ray) -> bool {
-        let t = self.test;
-        match &self.tree {
-            Tree::Wide(w) => w.occluded(ray, t),
-            Tree::Binary(b) => match self.traversal {
-                Traversal::Basic | Traversal::Fast => traverse_basic::occluded(b, ray, t),
-                Traversal::PriorityQueue => {
-                    traverse_ordered::occluded::<traverse_priority_queue::HeapFrontier>(b, ray, t)
-                }
-                Traversal::SortedVector => {
-                    traverse_ordered::occluded::<traverse_sorted_vector::SortedFrontier>(b, ray, t)
-                }
-                Traversal::NthElement => traverse_ordered::occluded::<traverse_nth_element::NthFrontier>(b, ray, t),
-            },
-        }
+        self.occluded_with(ray, &mut ())
     }
 }

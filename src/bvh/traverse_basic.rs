@@ -7,6 +7,7 @@ use crate::geometry::triangle::WatertightRay;
 use crate::geometry::{Hit, Ray, TriangleTest};
 
 use super::BinaryBvh;
+use super::count::Count;
 use super::slab::{RayPre, cull_bound};
 
 /// Stack size: one pending sibling per level, levels are capped at 100 by every builder.
@@ -14,6 +15,12 @@ pub(crate) const STACK: usize = 128;
 
 /// Closest hit by depth-first traversal.
 pub fn intersect(bvh: &BinaryBvh, ray: &Ray, test: TriangleTest) -> Option<Hit> {
+    intersect_counting(bvh, ray, test, &mut ())
+}
+
+/// [`intersect`] reporting every box test, leaf test and closer hit to `counts`.
+#[inline(always)]
+pub fn intersect_counting<C: Count>(bvh: &BinaryBvh, ray: &Ray, test: TriangleTest, counts: &mut C) -> Option<Hit> {
     if bvh.nodes.is_empty() {
         return None;
     }
@@ -27,11 +34,15 @@ pub fn intersect(bvh: &BinaryBvh, ray: &Ray, test: TriangleTest) -> Option<Hit> 
         sp -= 1;
         let i = stack[sp];
         let node = &bvh.nodes[i as usize];
+        counts.node(i);
         if pre.hit(node.min, node.max, r.t_min, cull_bound(r.t_max)).is_none() {
             continue;
         }
         if node.is_leaf() {
-            bvh.prims.intersect_leaf(node.offset, node.count, &mut r, &wr, test, &mut best);
+            counts.leaf(i, node.count);
+            if bvh.prims.intersect_leaf(node.offset, node.count, &mut r, &wr, test, &mut best) {
+                counts.closer();
+            }
         } else {
             // Right pushed first so the left child is visited first.
             stack[sp] = node.offset;
@@ -44,6 +55,12 @@ pub fn intersect(bvh: &BinaryBvh, ray: &Ray, test: TriangleTest) -> Option<Hit> 
 
 /// Any hit by depth-first traversal.
 pub fn occluded(bvh: &BinaryBvh, ray: &Ray, test: TriangleTest) -> bool {
+    occluded_counting(bvh, ray, test, &mut ())
+}
+
+/// [`occluded`] reporting every box test and leaf test to `counts`.
+#[inline(always)]
+pub fn occluded_counting<C: Count>(bvh: &BinaryBvh, ray: &Ray, test: TriangleTest, counts: &mut C) -> bool {
     if bvh.nodes.is_empty() {
         return false;
     }
@@ -56,10 +73,12 @@ pub fn occluded(bvh: &BinaryBvh, ray: &Ray, test: TriangleTest) -> bool {
         sp -= 1;
         let i = stack[sp];
         let node = &bvh.nodes[i as usize];
+        counts.node(i);
         if pre.hit(node.min, node.max, ray.t_min, t1).is_none() {
             continue;
         }
         if node.is_leaf() {
+            counts.leaf(i, node.count);
             if bvh.prims.occluded_leaf(node.offset, node.count, ray, &wr, test) {
                 return true;
             }

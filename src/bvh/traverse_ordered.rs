@@ -7,6 +7,7 @@ use crate::geometry::triangle::WatertightRay;
 use crate::geometry::{Hit, Ray, TriangleTest};
 
 use super::BinaryBvh;
+use super::count::Count;
 use super::slab::{RayPre, cull_bound};
 
 /// A set of boxes still to visit, keyed by entry distance.
@@ -21,12 +22,24 @@ pub trait Frontier: Default {
 
 /// Closest hit, expanding boxes nearest-first from frontier `F`.
 pub fn intersect<F: Frontier>(bvh: &BinaryBvh, ray: &Ray, test: TriangleTest) -> Option<Hit> {
+    intersect_counting::<F, ()>(bvh, ray, test, &mut ())
+}
+
+/// [`intersect`] reporting every box test, leaf test and closer hit to `counts`.
+#[inline(always)]
+pub fn intersect_counting<F: Frontier, C: Count>(
+    bvh: &BinaryBvh,
+    ray: &Ray,
+    test: TriangleTest,
+    counts: &mut C,
+) -> Option<Hit> {
     let root = bvh.nodes.first()?;
     let pre = RayPre::new(ray);
     let wr = WatertightRay::new(ray.dir);
     let mut r = *ray;
     let mut best = None;
     let mut f = F::default();
+    counts.node(0);
     if let Some(t) = pre.hit(root.min, root.max, r.t_min, cull_bound(r.t_max)) {
         f.push(t, 0);
     }
@@ -37,10 +50,14 @@ pub fn intersect<F: Frontier>(bvh: &BinaryBvh, ray: &Ray, test: TriangleTest) ->
         }
         let node = &bvh.nodes[i as usize];
         if node.is_leaf() {
-            bvh.prims.intersect_leaf(node.offset, node.count, &mut r, &wr, test, &mut best);
+            counts.leaf(i, node.count);
+            if bvh.prims.intersect_leaf(node.offset, node.count, &mut r, &wr, test, &mut best) {
+                counts.closer();
+            }
         } else {
             for c in [i + 1, node.offset] {
                 let child = &bvh.nodes[c as usize];
+                counts.node(c);
                 if let Some(tc) = pre.hit(child.min, child.max, r.t_min, cull) {
                     f.push(tc, c);
                 }
@@ -53,23 +70,37 @@ pub fn intersect<F: Frontier>(bvh: &BinaryBvh, ray: &Ray, test: TriangleTest) ->
 
 /// Any hit, visiting boxes in the same order (stops at the first hit).
 pub fn occluded<F: Frontier>(bvh: &BinaryBvh, ray: &Ray, test: TriangleTest) -> bool {
+    occluded_counting::<F, ()>(bvh, ray, test, &mut ())
+}
+
+/// [`occluded`] reporting every box test and leaf test to `counts`.
+#[inline(always)]
+pub fn occluded_counting<F: Frontier, C: Count>(
+    bvh: &BinaryBvh,
+    ray: &Ray,
+    test: TriangleTest,
+    counts: &mut C,
+) -> bool {
     let Some(root) = bvh.nodes.first() else { return false };
     let pre = RayPre::new(ray);
     let wr = WatertightRay::new(ray.dir);
     let t1 = cull_bound(ray.t_max);
     let mut f = F::default();
+    counts.node(0);
     if let Some(t) = pre.hit(root.min, root.max, ray.t_min, t1) {
         f.push(t, 0);
     }
     while let Some((_, i)) = f.pop_nearest() {
         let node = &bvh.nodes[i as usize];
         if node.is_leaf() {
+            counts.leaf(i, node.count);
             if bvh.prims.occluded_leaf(node.offset, node.count, ray, &wr, test) {
                 return true;
             }
         } else {
             for c in [i + 1, node.offset] {
                 let child = &bvh.nodes[c as usize];
+                counts.node(c);
                 if let Some(tc) = pre.hit(child.min, child.max, ray.t_min, t1) {
                     f.push(tc, c);
                 }

@@ -17,6 +17,8 @@ use super::packet::TriPackets;
 use super::slab::{cull_bound, far_scale};
 use super::{BinaryBvh, LeafPrims, Node};
 
+pub use super::count::{Count, TraversalCounts};
+
 /// Children per wide node.
 pub const WIDTH: usize = 8;
 
@@ -201,7 +203,7 @@ macro_rules! closest {
         'outer: loop {
             if cur.count == 0 {
                 let node = &$self.nodes[cur.child as usize];
-                $counts.node();
+                $counts.node(cur.child);
                 let (mut mask, near) = $box8!(node, &pre, cull);
                 if mask != 0 {
                     $self.prefetch_children(node, mask);
@@ -248,10 +250,11 @@ macro_rules! closest {
                     continue 'outer;
                 }
             } else if {
-                $counts.leaf(cur.count);
+                $counts.leaf(cur.child, cur.count);
                 let wr = wr.get_or_insert_with(|| WatertightRay::new($ray.dir));
                 $self.$leaf(cur.child, cur.count, &mut r, wr, $test, &mut best)
             } {
+                $counts.closer();
                 cull = cull_bound(r.t_max);
             }
             loop {
@@ -273,7 +276,7 @@ macro_rules! closest {
 
 /// Any-hit traversal, generic over the box test (no ordering needed).
 macro_rules! any_hit {
-    ($self:ident, $ray:ident, $test:ident, $box8:ident, $leaf:ident, $stack:expr) => {{
+    ($self:ident, $ray:ident, $test:ident, $box8:ident, $leaf:ident, $counts:expr, $stack:expr) => {{
         let pre = WidePre::new($ray);
         let mut wr: Option<WatertightRay> = None;
         let cull = cull_bound($ray.t_max);
@@ -285,12 +288,15 @@ macro_rules! any_hit {
         while sp > 0 {
             sp -= 1;
             // SAFETY: entries below sp were written before.
-            let node = &$self.nodes[unsafe { stack[sp].assume_init() } as usize];
+            let index = unsafe { stack[sp].assume_init() };
+            let node = &$self.nodes[index as usize];
+            $counts.node(index);
             let (mut mask, _) = $box8!(node, &pre, cull);
             while mask != 0 {
                 let l = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
                 if node.count[l] > 0 {
+                    $counts.leaf(node.child[l], node.count[l]);
                     let wr = wr.get_or_insert_with(|| WatertightRay::new($ray.dir));
                     if $self.$leaf(node.child[l], node.count[l], $ray, wr, $test) {
                         return true;
@@ -324,45 +330,6 @@ macro_rules! dispatch {
         }
         if shallow { $self.$scalar::<$($g,)* SHALLOW_STACK>($($arg),*) } else { $self.$scalar::<$($g,)* STACK>($($arg),*) }
     }};
-}
-
-/// Work done by closest-hit traversals, summed over rays.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct TraversalCounts {
-    /// Rays traced.
-    pub rays: u64,
-    /// Wide nodes whose eight boxes were tested.
-    pub nodes: u64,
-    /// Leaves whose primitives were tested.
-    pub leaves: u64,
-    /// Leaf packets tested (4 triangles each).
-    pub packets: u64,
-}
-
-/// What the traversal reports as it goes: nothing in production, counts in
-/// [`WideBvh::intersect_counted`].
-trait Count {
-    fn node(&mut self);
-    fn leaf(&mut self, count: u32);
-}
-
-impl Count for () {
-    #[inline(always)]
-    fn node(&mut self) {}
-    #[inline(always)]
-    fn leaf(&mut self, _: u32) {}
-}
-
-impl Count for TraversalCounts {
-    #[inline(always)]
-    fn node(&mut self) {
-        self.nodes += 1;
-    }
-    #[inline(always)]
-    fn leaf(&mut self, count: u32) {
-        self.leaves += 1;
-        self.packets += super::packet::packets_for(count) as u64;
-    }
 }
 
 /// A wide BVH sharing the reordered primitives of the binary BVH it came from.
@@ -436,12 +403,14 @@ impl WideBvh {
     /// [`Self::intersect`] that also counts the work it does into `counts`
     /// (the same traversal; the counting is compiled out of `intersect`).
     pub fn intersect_counted(&self, ray: &Ray, test: TriangleTest, counts: &mut TraversalCounts) -> Option<Hit> {
-        counts.rays += 1;
+        counts.ray();
         self.intersect_counting(ray, test, counts)
     }
 
+    /// [`Self::intersect`] reporting its work to `counts` (any [`Count`];
+    /// `()` is [`Self::intersect`] itself). Does not call [`Count::ray`].
     #[inline(always)]
-    fn intersect_counting<C: Count>(&self, ray: &Ray, test: TriangleTest, counts: &mut C) -> Option<Hit> {
+    pub fn intersect_counting<C: Count>(&self, ray: &Ray, test: TriangleTest, counts: &mut C) -> Option<Hit> {
         if self.nodes.is_empty() {
             return None;
         }
@@ -450,10 +419,17 @@ impl WideBvh {
 
     /// True when anything is hit within the ray's interval.
     pub fn occluded(&self, ray: &Ray, test: TriangleTest) -> bool {
+        self.occluded_counting(ray, test, &mut ())
+    }
+
+    /// [`Self::occluded`] reporting its work to `counts` (the same traversal).
+    /// Does not call [`Count::ray`].
+    #[inline(always)]
+    pub fn occluded_counting<C: Count>(&self, ray: &Ray, test: TriangleTest, counts: &mut C) -> bool {
         if self.nodes.is_empty() {
             return false;
         }
-        dispatch!(self, occluded_avx2, occluded_scalar, [], (ray, test))
+        dispatch!(self, occluded_avx2, occluded_scalar, [C], (ray, test, counts))
     }
 
     /// Ask the cache for the nodes and leaf primitives of the children in
@@ -552,8 +528,8 @@ impl WideBvh {
         closest!(self, ray, test, box8_portable, leaf_closest_scalar, counts, S)
     }
 
-    fn occluded_scalar<const S: usize>(&self, ray: &Ray, test: TriangleTest) -> bool {
-        any_hit!(self, ray, test, box8_portable, leaf_occluded_scalar, S)
+    fn occluded_scalar<C: Count, const S: usize>(&self, ray: &Ray, test: TriangleTest, counts: &mut C) -> bool {
+        any_hit!(self, ray, test, box8_portable, leaf_occluded_scalar, counts, S)
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -564,8 +540,8 @@ impl WideBvh {
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn occluded_avx2<const S: usize>(&self, ray: &Ray, test: TriangleTest) -> bool {
-        any_hit!(self, ray, test, box8_avx2, leaf_occluded_simd, S)
+    fn occluded_avx2<C: Count, const S: usize>(&self, ray: &Ray, test: TriangleTest, counts: &mut C) -> bool {
+        any_hit!(self, ray, test, box8_avx2, leaf_occluded_simd, counts, S)
     }
 }
 

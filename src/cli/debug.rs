@@ -1,16 +1,20 @@
 //! `rtdiff debug`: the reports' visual debugging, headless. Traces the camera
 //! ray through one pixel and prints every ray it causes (reflections, glossy
 //! and transmission rays, light samples, shadow rays and what blocks them),
-//! with hit data and colours, as an indented tree or JSON.
+//! with hit data and colours, as an indented tree or JSON; with `--draw`,
+//! draws an overlay over the render ([`crate::debug`]); with `--heatmap`,
+//! writes the per-pixel traversal work.
 
 use std::fmt::Write;
 use std::path::PathBuf;
 
-use crate::accel;
+use crate::accel::{self, Builder, Traversal};
+use crate::debug::{self, Metric};
 use crate::error::{Error, Result};
 use crate::integrator::Counters;
 use crate::integrator::Whitted;
 use crate::integrator::debug::{RayKind, RayNode, RayTree};
+use crate::render::RenderOptions;
 use crate::rng::Pcg32;
 use crate::scene::{Overrides, Scene};
 
@@ -28,6 +32,51 @@ pub struct DebugArgs {
     /// Print JSON instead of the tree.
     #[arg(long)]
     pub json: bool,
+    /// Draw over the render: bvh-level=N, bvh-leaf=N, traversal, rays, normals (these three need
+    /// --pixel), sah-splits (with --node), focal-plane. Needs -o.
+    #[arg(long, value_name = "WHAT")]
+    pub draw: Option<String>,
+    /// Node of `--draw sah-splits` (depth-first index, 0 = root).
+    #[arg(long)]
+    pub node: Option<u32>,
+    /// Write the per-pixel count of node visits, triangle tests or rays traced (any builder x
+    /// traversal) as a PNG with a colour bar; the counts also go to OUT.exr. Needs -o.
+    #[arg(long, value_name = "METRIC")]
+    pub heatmap: Option<Metric>,
+    /// Fixed top of the heatmap's colour scale (default: the image's maximum), to compare images.
+    #[arg(long, value_name = "COUNT")]
+    pub scale_max: Option<u64>,
+    /// Output picture (.png, or .exr for the linear image or the heatmap's counts).
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Also write the overlay's lines as an OBJ file (`l` elements with vertex colours).
+    #[arg(long, value_name = "FILE.obj")]
+    pub obj: Option<PathBuf>,
+    /// Draw from the scene's camera turned by this many degrees about its up axis (pixels still
+    /// refer to the scene's camera), so rays along the view become visible.
+    #[arg(long, value_name = "DEGREES", allow_hyphen_values = true)]
+    pub orbit: Option<f32>,
+    /// BVH builder (of the render and the BVH overlays and heatmaps).
+    #[arg(long)]
+    pub builder: Option<Builder>,
+    /// BVH traversal (of the render and the `traversal` overlay and heatmaps).
+    #[arg(long)]
+    pub traversal: Option<Traversal>,
+    /// Image width.
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height.
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Camera samples per pixel.
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Worker threads (the pictures are identical for any count).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// No progress bar and no summary line.
+    #[arg(short, long)]
+    pub quiet: bool,
 }
 
 fn v3(v: [f32; 3]) -> String {
@@ -88,11 +137,99 @@ fn print_node(scene: &Scene, n: &RayNode, indent: usize, out: &mut String) {
     }
 }
 
+fn output_ext(args: &DebugArgs) -> Result<(PathBuf, String)> {
+    let out = args.output.clone().ok_or_else(|| Error::Invalid("--draw and --heatmap need -o OUT.png".into()))?;
+    let ext = out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
+    if ext != "png" && ext != "exr" {
+        return Err(Error::file(&out, "unknown output format: use a .png or .exr file name"));
+    }
+    Ok((out, ext))
+}
+
+fn run_draw(args: &DebugArgs, mut scene: Scene, what: &str) -> Result<()> {
+    let (out, _) = output_ext(args)?;
+    let pixel = match args.pixel[..] {
+        [x, y] => Some((x, y)),
+        _ => None,
+    };
+    let overlay = debug::overlay::parse(what, pixel, args.node)?;
+    let view = args.orbit.map(|deg| debug::draw::orbit(&scene.camera, deg));
+    let accel = scene.accel;
+    let opts = RenderOptions { threads: args.threads, quiet: args.quiet };
+    let d = debug::draw(&mut scene, overlay.as_ref(), &accel, view, &opts)?;
+    d.image.write(&out)?;
+    if let Some(obj) = &args.obj {
+        let comment = format!("{} of {}", d.name, args.scene.display());
+        debug::obj::write_obj(&d.lines, &comment, obj)?;
+    }
+    if !args.quiet {
+        let changed = d.mask.iter().filter(|&&m| m).count();
+        eprintln!(
+            "{}: {} ({} segments, {changed} pixels drawn) -> {}",
+            args.scene.display(),
+            d.name,
+            d.lines.len(),
+            out.display()
+        );
+    }
+    Ok(())
+}
+
+fn run_heatmap(args: &DebugArgs, scene: &Scene, metric: Metric) -> Result<()> {
+    let (out, ext) = output_ext(args)?;
+    let opts = RenderOptions { threads: args.threads, quiet: args.quiet };
+    let hm = debug::heatmap(scene, &scene.accel, &opts)?;
+    let exr = out.with_extension("exr");
+    if ext == "png" {
+        hm.write_png(metric, args.scale_max, &out)?;
+    }
+    hm.write_exr(&exr)?;
+    if !args.quiet {
+        let t = hm.totals;
+        let px = f64::from(hm.width) * f64::from(hm.height);
+        eprintln!(
+            "{}: {} | {} rays, {} node visits ({:.2}/ray), {} triangle tests ({:.2}/ray), {:.1} {} per pixel -> {}{}",
+            args.scene.display(),
+            hm.tracer,
+            t.rays,
+            t.nodes,
+            t.nodes as f64 / t.rays.max(1) as f64,
+            t.triangles,
+            t.triangles as f64 / t.rays.max(1) as f64,
+            hm.total(metric) as f64 / px,
+            metric.name(),
+            if ext == "png" { format!("{}, ", out.display()) } else { String::new() },
+            exr.display()
+        );
+    }
+    Ok(())
+}
+
 /// Run `rtdiff debug`.
 pub fn run(args: &DebugArgs) -> Result<()> {
     let features = args.features.iter().map(|f| super::render::parse_feature(f)).collect::<Result<_>>()?;
-    let scene = Scene::load_with(&args.scene, &Overrides { features, ..Default::default() })?;
-    let [x, y] = args.pixel[..] else { return Err(Error::Invalid("--pixel takes X and Y".into())) };
+    let ov = Overrides {
+        features,
+        width: args.width,
+        height: args.height,
+        spp: args.spp,
+        builder: args.builder,
+        traversal: args.traversal,
+        ..Default::default()
+    };
+    let scene = Scene::load_with(&args.scene, &ov)?;
+    if args.draw.is_some() && args.heatmap.is_some() {
+        return Err(Error::Invalid("--draw and --heatmap are separate pictures: give one".into()));
+    }
+    if let Some(what) = &args.draw {
+        return run_draw(args, scene, what);
+    }
+    if let Some(metric) = args.heatmap {
+        return run_heatmap(args, &scene, metric);
+    }
+    let [x, y] = args.pixel[..] else {
+        return Err(Error::Invalid("give --pixel X Y (the ray tree), --draw WHAT or --heatmap METRIC".into()));
+    };
     if x >= scene.width || y >= scene.height {
         return Err(Error::Invalid(format!("pixel ({x}, {y}) is outside the {}x{} image", scene.width, scene.height)));
     }

@@ -348,10 +348,7 @@ pub fn run(opts: &ConvergenceOptions) -> Result<ConvergenceReport> {
             feature,
             scene: format!("scenes/{scene}"),
             setup: setup.to_string(),
-            reference: format!(
-                "rtdiff, {} samples, seed {REFERENCE_SEED} (Mitsuba references not used: see `mitsuba`)",
-                opts.reference_count
-            ),
+            reference: format!("rtdiff, {} samples, seed {REFERENCE_SEED}", opts.reference_count),
             reference_ms,
             fit: fit_loglog(&fit_pts),
             time_to_target_ms: time_to_error(&points, opts.target_rel_mse),
@@ -366,8 +363,11 @@ pub fn run(opts: &ConvergenceOptions) -> Result<ConvergenceReport> {
         fit_max: opts.fit_max,
         target_rel_mse: opts.target_rel_mse,
         rel_mse_epsilon: crate::verify::image::metrics::REL_MSE_EPSILON,
-        mitsuba: "not compared: no exported scene and Mitsuba run for these sweeps yet (rtdiff export / reference/ \
-                  are not in this tree)"
+        mitsuba: "no Mitsuba curve yet: reference/ holds Mitsuba renders of the scenes as they are (pixel centres, \
+                  fixed light samples), not of these sweeps (random or jittered light samples, the reports' glossy \
+                  lobe, which Mitsuba lacks, an aperture, N pixel samples); a curve needs one Mitsuba run per \
+                  sample count through scripts/mitsuba, which is not done, so the reference is rtdiff's converged \
+                  render"
             .into(),
         curves,
         seconds: start.elapsed().as_secs_f64(),

@@ -9,6 +9,7 @@ pub mod bench;
 pub mod clock;
 pub mod convergence;
 pub mod machine;
+pub mod mitsuba;
 pub mod progress;
 pub mod race;
 pub mod stability;

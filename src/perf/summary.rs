@@ -18,9 +18,12 @@ pub struct Measure {
 impl Measure {
     /// Summary of `samples`; `None` when there are none.
     pub fn of(samples: &[f64]) -> Option<Self> {
+        if samples.is_empty() {
+            return None;
+        }
         let mut v: Vec<f64> = samples.to_vec();
         v.sort_by(f64::total_cmp);
-        Some(Self { median: v[v.len() / 2], min: *v.first()?, max: *v.last()?, runs: v.len() })
+        Some(Self { median: v[v.len() / 2], min: v[0], max: v[v.len() - 1], runs: v.len() })
     }
 
     /// A figure that does not vary between runs (a count).

@@ -7,9 +7,10 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::html::{Figure, PictureRow, Section};
-use super::table::fmt_num;
+use super::table::{Table, fmt_num};
 use crate::error::{Error, Result};
 use crate::perf::convergence::{ConvergenceOptions, ConvergenceReport};
+use crate::perf::mitsuba::MitsubaReport;
 use crate::perf::stability::{StabilityOptions, StabilityReport};
 use crate::perf::table::{PerfOptions, PerfReport};
 
@@ -119,6 +120,10 @@ pub fn generate(opts: &ReportOptions) -> Result<Generated> {
         sections.push(stability_files(&r, opts, &mut files, &mut markdown)?);
     }
     if all {
+        let images = dir.join("images");
+        if let Some(r) = crate::perf::mitsuba::run(&opts.root, &images, opts.quiet)? {
+            sections.push(mitsuba_files(&r, opts, &mut files, &mut markdown)?);
+        }
         let header: Vec<_> = machine.into_iter().collect();
         let page = super::html::page("rtdiff report", &header, &sections);
         write(&dir.join("index.html"), &page, &mut files)?;
@@ -259,4 +264,99 @@ fn stability_files(
         command: command("stability", opts),
         data: vec!["stability.json".into(), "stability.md".into()],
     })
+}
+
+fn mitsuba_files(
+    r: &MitsubaReport,
+    opts: &ReportOptions,
+    files: &mut Vec<PathBuf>,
+    md: &mut String,
+) -> Result<Section> {
+    let dir = &opts.out;
+    let table = Table {
+        title: format!("rtdiff against {} ({}x{})", r.mitsuba, r.size.0, r.size.1),
+        header: vec![
+            "scene".into(),
+            "model".into(),
+            "reference".into(),
+            "relMSE".into(),
+            "mean FLIP".into(),
+            "pixels over 1e-3 relative".into(),
+            "rtdiff ms".into(),
+        ],
+        rows: r
+            .rows
+            .iter()
+            .map(|row| {
+                vec![
+                    row.scene.clone(),
+                    model_name(row.model).into(),
+                    if row.deterministic {
+                        "pixel centres".into()
+                    } else {
+                        format!("mean of {} seeds", row.reference_seeds)
+                    },
+                    fmt_num(row.rel_mse),
+                    fmt_num(row.flip),
+                    format!("{:.3}%", 100.0 * row.over_rel_threshold_fraction),
+                    fmt_num(row.rtdiff_ms),
+                ]
+            })
+            .collect(),
+        notes: vec![
+            "Each scene rendered by rtdiff in the reference's shading model and size (seed 0). Area-light scenes \
+             are noisy in both renderers: their differences include both renderers' noise (tests/mitsuba_reference.rs \
+             checks them statistically)."
+                .into(),
+        ],
+    };
+    let text = format!("## Against Mitsuba 3\n\n{}", table.to_markdown());
+    write_json(&dir.join("mitsuba.json"), r, files)?;
+    write(&dir.join("mitsuba.md"), &text, files)?;
+    md.push_str(&text);
+    md.push('\n');
+    let pictures = r
+        .rows
+        .iter()
+        .map(|row| {
+            let img = |f: &str| format!("images/{f}");
+            for p in &row.pictures {
+                files.push(dir.join("images").join(p));
+            }
+            PictureRow {
+                title: format!("{} ({})", row.scene, model_name(row.model)),
+                render_label: "rtdiff".into(),
+                render: img(&row.pictures[0]),
+                reference_label: r.mitsuba.clone(),
+                reference: img(&row.pictures[1]),
+                difference: (
+                    img(&row.pictures[2]),
+                    format!("|difference|, full scale {}", fmt_num(f64::from(row.diff_scale))),
+                ),
+                flip: (img(&row.pictures[3]), "FLIP map (LDR)".into()),
+                metrics: format!(
+                    "relMSE {}, mean FLIP {}, {:.3}% of pixels over 1e-3 relative.",
+                    fmt_num(row.rel_mse),
+                    fmt_num(row.flip),
+                    100.0 * row.over_rel_threshold_fraction
+                ),
+            }
+        })
+        .collect();
+    Ok(Section {
+        id: "mitsuba".into(),
+        title: "Against Mitsuba 3".into(),
+        intro: "Every scene of reference/manifest.json: rtdiff | Mitsuba (hover the first picture to flip between \
+                the two) | absolute difference | FLIP map."
+            .into(),
+        tables: vec![table],
+        figures: Vec::new(),
+        pictures,
+        command: command("all", opts),
+        data: vec!["mitsuba.json".into(), "mitsuba.md".into()],
+    })
+}
+
+fn model_name(m: crate::shading::ShadingModelKind) -> &'static str {
+    if m == crate::shading::ShadingModelKind::Phong { "phong" } else { "physical" }
 }

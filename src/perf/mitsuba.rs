@@ -1,0 +1,139 @@
+//! rtdiff against the Mitsuba 3 references in `reference/` (made by
+//! scripts/mitsuba/make_references.py, listed in `reference/manifest.json`):
+//! each referenced scene rendered by rtdiff in the same shading model and at
+//! the same size, its metrics, and the pictures of a side-by-side row.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::film::Image;
+use crate::render::{RenderOptions, render};
+use crate::scene::export::mitsuba::force_shading_model;
+use crate::scene::{Overrides, Scene};
+use crate::shading::ShadingModelKind;
+use crate::verify::image::diff_image::{write_error_png, write_flip_png};
+use crate::verify::image::metrics::absolute_difference;
+use crate::verify::image::{CompareOptions, FlipMode, compare, flip, read_image};
+
+/// The manifest's fields this module reads.
+#[derive(Clone, Debug, Deserialize)]
+struct Manifest {
+    mitsuba: String,
+    variant: String,
+    width: u32,
+    height: u32,
+    references: Vec<ManifestEntry>,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+struct ManifestEntry {
+    scene: String,
+    model: ShadingModelKind,
+    deterministic: bool,
+    seeds: Vec<u64>,
+    image: String,
+}
+
+/// One scene and model compared with Mitsuba.
+#[derive(Clone, Debug, Serialize)]
+pub struct MitsubaRow {
+    /// Scene file (relative to the project root).
+    pub scene: String,
+    /// Shading model.
+    pub model: ShadingModelKind,
+    /// Pixel-centre scene (false: area lights, the reference is a mean over seeds).
+    pub deterministic: bool,
+    /// Seeds averaged in the reference.
+    pub reference_seeds: usize,
+    /// relMSE of rtdiff against Mitsuba.
+    pub rel_mse: f64,
+    /// Mean LDR-FLIP.
+    pub flip: f64,
+    /// Fraction of pixels whose relative difference exceeds 1e-3 (floor 1e-2).
+    pub over_rel_threshold_fraction: f64,
+    /// rtdiff's render time in ms.
+    pub rtdiff_ms: f64,
+    /// Pictures, relative to the images folder: rtdiff, Mitsuba, |difference| (magma), FLIP map.
+    pub pictures: [String; 4],
+    /// Full scale of the difference picture.
+    pub diff_scale: f32,
+}
+
+/// Every comparison.
+#[derive(Clone, Debug, Serialize)]
+pub struct MitsubaReport {
+    /// Mitsuba version and variant of the references.
+    pub mitsuba: String,
+    /// Image size.
+    pub size: (u32, u32),
+    /// One row per manifest entry.
+    pub rows: Vec<MitsubaRow>,
+}
+
+/// Compare every reference of `root/reference/manifest.json`, writing the pictures into `images`.
+/// `Ok(None)` when the project has no references.
+pub fn run(root: &Path, images: &Path, quiet: bool) -> Result<Option<MitsubaReport>> {
+    let dir = root.join("reference");
+    let path = dir.join("manifest.json");
+    if !path.exists() {
+        return Ok(None);
+    }
+    let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, &e))?;
+    let m: Manifest = serde_json::from_str(&text).map_err(|e| Error::file(&path, format!("invalid manifest: {e}")))?;
+    std::fs::create_dir_all(images).map_err(|e| Error::io(images, &e))?;
+    let bar = super::progress::bar(m.references.len() as u64, "report mitsuba", quiet);
+    let mut rows = Vec::new();
+    for e in &m.references {
+        bar.set_message(e.scene.clone());
+        rows.push(compare_one(root, &dir, images, &m, e)?);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    Ok(Some(MitsubaReport {
+        mitsuba: format!("Mitsuba {} ({})", m.mitsuba, m.variant),
+        size: (m.width, m.height),
+        rows,
+    }))
+}
+
+fn compare_one(root: &Path, dir: &Path, images: &Path, m: &Manifest, e: &ManifestEntry) -> Result<MitsubaRow> {
+    let scene_path = root.join(&e.scene);
+    let mut file = Scene::read_file(&scene_path)?;
+    force_shading_model(&mut file, e.model);
+    let ov = Overrides { width: Some(m.width), height: Some(m.height), seed: Some(0), ..Default::default() };
+    let scene = Scene::from_file_with(file, &scene_path, &ov)?;
+    let tracer = crate::accel::build_tracer(scene.prims.clone(), &scene.accel)?;
+    let r = render(&scene, tracer.as_ref(), &RenderOptions { threads: None, quiet: true })?;
+    let ours: Image = r.image;
+    let reference = read_image(&dir.join(&e.image))?;
+    let metrics = compare(&reference, &ours, &CompareOptions::default())?;
+    let f = flip(&reference, &ours, FlipMode::Ldr, crate::verify::image::flip::DEFAULT_PIXELS_PER_DEGREE)?;
+    let model = if e.model == ShadingModelKind::Phong { "phong" } else { "physical" };
+    let stem = Path::new(&e.scene).file_stem().and_then(|s| s.to_str()).unwrap_or("scene");
+    let name = format!("mitsuba-{stem}.{model}");
+    let pictures = [
+        format!("{name}.rtdiff.png"),
+        format!("{name}.mitsuba.png"),
+        format!("{name}.diff.png"),
+        format!("{name}.flip.png"),
+    ];
+    ours.write(&images.join(&pictures[0]))?;
+    reference.write(&images.join(&pictures[1]))?;
+    let diff = absolute_difference(&reference, &ours)?;
+    let diff_scale = write_error_png(&diff, ours.width, ours.height, None, &images.join(&pictures[2]))?;
+    write_flip_png(&f, &images.join(&pictures[3]))?;
+    Ok(MitsubaRow {
+        scene: e.scene.clone(),
+        model: e.model,
+        deterministic: e.deterministic,
+        reference_seeds: e.seeds.len(),
+        rel_mse: metrics.rel_mse,
+        flip: f.mean,
+        over_rel_threshold_fraction: metrics.over_rel_threshold_fraction,
+        rtdiff_ms: r.seconds * 1e3,
+        pictures,
+        diff_scale,
+    })
+}
