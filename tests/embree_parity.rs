@@ -80,6 +80,10 @@ fn check(mesh: &str, r: &ParityReport) {
             assert_eq!(v.dist_over_bound, 0, "{at}: distance beyond bound: {:#?}", v.examples);
             assert_eq!(v.bary_over_bound, 0, "{at}: barycentrics beyond bound: {:#?}", v.examples);
             assert_eq!(v.self_hits, 0, "{at}: false self-intersections");
+            // The exact arbiter: the native answer is exact on every
+            // disagreement whose ray is not ill-conditioned.
+            let a = v.arbiter.as_ref().expect("the arbiter runs by default");
+            assert_eq!(a.native_wrong_outside_ill_conditioned, 0, "{at}: {:#?}", a.replays);
         }
         assert_eq!(s.reference_self_hits, 0, "{mesh}, set {}: Embree self-intersections", s.set);
     }
@@ -98,6 +102,7 @@ fn run_mesh(mesh: &str, ctx: RayContext) {
             sweep_count: None,
             stress: false,
             max_examples: 5,
+            arbiter: true,
         };
         let r = parity::run(&ctx, &opts).unwrap();
         total += r.sets.iter().map(|s| s.rays).sum::<usize>();

@@ -200,6 +200,7 @@ fn every_mesh_holds_hit_parity_against_embree() {
             variants: vec![AccelConfig::default()],
             sweep_count: None,
             stress: false,
+            arbiter: true,
             max_examples: 3,
         };
         let r = parity::run(&ctx, &opts).unwrap();

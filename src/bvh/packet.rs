@@ -3,9 +3,10 @@
 //! traversal) by the watertight test, lane for lane the same operations in the
 //! same order as [`crate::geometry::triangle::intersect_watertight`] (separate
 //! multiplies and subtractions, no fused multiply-add), so every lane's
-//! `t, u, v` are bit-identical to the scalar routine's. Lanes whose single
-//! precision edge function is exactly zero take the scalar routine (with its
-//! double-precision fallback) instead.
+//! `t, u, v` are bit-identical to the scalar routine's. Lanes with an edge
+//! function whose single-precision sign is uncertain (within
+//! `SIGN_MARGIN` error bounds of 0) take the scalar routine, with its
+//! double-precision fallback, instead.
 //!
 //! The vertices are stored, not edges or a normal: the watertight test works
 //! on the vertices relative to the ray origin, and any precomputed quantity
@@ -14,7 +15,7 @@
 use glam::Vec3;
 
 use crate::geometry::offset::gamma;
-use crate::geometry::triangle::{WatertightRay, intersect_moller_trumbore};
+use crate::geometry::triangle::{SIGN_MARGIN, WatertightRay, intersect_moller_trumbore};
 use crate::geometry::{Hit, Ray, TriangleTest};
 
 use super::prims::{LeafPrims, watertight};
@@ -208,10 +209,11 @@ fn offer(best: &mut Option<Hit>, ray: &mut Ray, t: f32, id: u32, u: f32, v: f32)
     Hit::offer(best, ray, Hit { t, prim: id, u, v })
 }
 
-/// The watertight test on four lanes: `(hit mask, zero-edge mask, t, u, v)`.
-/// Lanes in the zero-edge mask (some edge function exactly 0 in single
-/// precision) are excluded from the hit mask and must be decided by the
-/// scalar routine.
+/// The watertight test on four lanes: `(hit mask, uncertain mask, t, u, v)`.
+/// Lanes in the uncertain mask (some edge function within `SIGN_MARGIN`
+/// error bounds of 0 in single precision, or a distance in range that is not
+/// provably positive) are excluded from the hit mask and must be decided by
+/// the scalar routine.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn tri4_sse(p: &Tri4, ray: &Ray, wr: &WatertightRay) -> (u32, u32, [f32; PW], [f32; PW], [f32; PW]) {
@@ -238,34 +240,16 @@ fn tri4_sse(p: &Tri4, ray: &Ray, wr: &WatertightRay) -> (u32, u32, [f32; PW], [f
         let e1 = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
         let e2 = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
         let z = _mm_setzero_ps();
-        let zero = _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(e0, z), _mm_cmpeq_ps(e1, z)), _mm_cmpeq_ps(e2, z));
-        let neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(e0, z), _mm_cmplt_ps(e1, z)), _mm_cmplt_ps(e2, z));
-        let pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(e0, z), _mm_cmpgt_ps(e1, z)), _mm_cmpgt_ps(e2, z));
-        let det = _mm_add_ps(_mm_add_ps(e0, e1), e2);
         let az = _mm_mul_ps(sz, a_z);
         let bz = _mm_mul_ps(sz, b_z);
         let cz = _mm_mul_ps(sz, c_z);
-        let t_scaled = _mm_add_ps(_mm_add_ps(_mm_mul_ps(e0, az), _mm_mul_ps(e1, bz)), _mm_mul_ps(e2, cz));
-        let inv_det = _mm_div_ps(_mm_set1_ps(1.0), det);
-        let t = _mm_mul_ps(t_scaled, inv_det);
-        // Ordered comparisons: a NaN t fails both, as `!(t >= t_min && t <= t_max)` rejects it.
-        let in_range = _mm_and_ps(_mm_cmpge_ps(t, _mm_set1_ps(ray.t_min)), _mm_cmple_ps(t, _mm_set1_ps(ray.t_max)));
-        let reject = _mm_or_ps(_mm_or_ps(_mm_and_ps(neg, pos), _mm_cmpeq_ps(det, z)), zero);
-        let ok = _mm_andnot_ps(reject, in_range);
-        let zero_mask = _mm_movemask_ps(zero) as u32;
-        if _mm_movemask_ps(ok) == 0 {
-            // Most packets are missed: skip the error bound and the stores.
-            return (0, zero_mask, [0.0; PW], [0.0; PW], [0.0; PW]);
-        }
-        // The provably-positive-t check of `watertight_t_error` (pbrt-v4 6.8.7), same operation order.
+        // The edge functions' error bound (`watertight_e_error`, same operation order).
         let sign = _mm_set1_ps(-0.0);
         let abs = |x: __m128| _mm_andnot_ps(sign, x);
-        // Operands are non-negative (no -0) and non-NaN wherever `t` passed the range test, so
-        // `maxps` agrees with `f32::max` on every lane that matters.
+        // Operands are non-negative (no -0); a NaN lane fails every comparison below and is never a hit.
         let max3 = |x: __m128, y: __m128, w: __m128| _mm_max_ps(_mm_max_ps(abs(x), abs(y)), abs(w));
         let (max_xt, max_yt, max_zt) = (max3(ax, bx, cx), max3(ay, by, cy), max3(az, bz, cz));
         let (g2, g3, g5) = (_mm_set1_ps(gamma(2)), _mm_set1_ps(gamma(3)), _mm_set1_ps(gamma(5)));
-        let delta_z = _mm_mul_ps(g3, max_zt);
         let delta_x = _mm_mul_ps(g5, _mm_add_ps(max_xt, max_zt));
         let delta_y = _mm_mul_ps(g5, _mm_add_ps(max_yt, max_zt));
         let delta_e = _mm_mul_ps(
@@ -275,6 +259,26 @@ fn tri4_sse(p: &Tri4, ray: &Ray, wr: &WatertightRay) -> (u32, u32, [f32; PW], [f
                 _mm_mul_ps(delta_x, max_yt),
             ),
         );
+        // Lanes with an edge function within SIGN_MARGIN bounds of 0: uncertain sign.
+        let min_e = _mm_min_ps(_mm_min_ps(abs(e0), abs(e1)), abs(e2));
+        let uncertain = _mm_cmple_ps(min_e, _mm_mul_ps(_mm_set1_ps(SIGN_MARGIN), delta_e));
+        let neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(e0, z), _mm_cmplt_ps(e1, z)), _mm_cmplt_ps(e2, z));
+        let pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(e0, z), _mm_cmpgt_ps(e1, z)), _mm_cmpgt_ps(e2, z));
+        let det = _mm_add_ps(_mm_add_ps(e0, e1), e2);
+        let t_scaled = _mm_add_ps(_mm_add_ps(_mm_mul_ps(e0, az), _mm_mul_ps(e1, bz)), _mm_mul_ps(e2, cz));
+        let inv_det = _mm_div_ps(_mm_set1_ps(1.0), det);
+        let t = _mm_mul_ps(t_scaled, inv_det);
+        // Ordered comparisons: a NaN t fails both, as `!(t >= t_min && t <= t_max)` rejects it.
+        let in_range = _mm_and_ps(_mm_cmpge_ps(t, _mm_set1_ps(ray.t_min)), _mm_cmple_ps(t, _mm_set1_ps(ray.t_max)));
+        let reject = _mm_or_ps(_mm_and_ps(neg, pos), uncertain);
+        let ok = _mm_andnot_ps(reject, in_range);
+        let zero_mask = _mm_movemask_ps(uncertain) as u32;
+        if _mm_movemask_ps(ok) == 0 {
+            // Most packets are missed: skip the t error bound and the stores.
+            return (0, zero_mask, [0.0; PW], [0.0; PW], [0.0; PW]);
+        }
+        // The provably-positive-t check of `watertight_t_error` (pbrt-v4 6.8.7), same operation order.
+        let delta_z = _mm_mul_ps(g3, max_zt);
         let max_e = max3(e0, e1, e2);
         let t_err = _mm_mul_ps(
             _mm_mul_ps(
@@ -286,8 +290,10 @@ fn tri4_sse(p: &Tri4, ray: &Ray, wr: &WatertightRay) -> (u32, u32, [f32; PW], [f
             ),
             abs(inv_det),
         );
-        let not_positive = _mm_cmple_ps(t, t_err);
+        // Lanes whose distance is not provably positive go to the scalar routine too.
+        let not_positive = _mm_and_ps(_mm_cmple_ps(t, t_err), ok);
         let ok = _mm_andnot_ps(not_positive, ok);
+        let zero_mask = zero_mask | _mm_movemask_ps(not_positive) as u32;
         let (mut ts, mut us, mut vs) = ([0.0f32; PW], [0.0f32; PW], [0.0f32; PW]);
         // Each array has room for 4 floats; storeu has no alignment requirement.
         _mm_storeu_ps(ts.as_mut_ptr(), t);

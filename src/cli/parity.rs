@@ -54,6 +54,9 @@ pub struct ParityArgs {
     /// `sah/fast` (which always sees every ray); 0 = all rays.
     #[arg(long, default_value_t = 10_000, value_parser = crate::limits::ranged::<usize>(0, crate::limits::MAX_RAYS as u64))]
     pub sweep_count: usize,
+    /// Skip the exact arbiter (which judges every disagreement).
+    #[arg(long)]
+    pub no_arbiter: bool,
     /// Disagreeing rays to print per set and tracer (0 to 10000).
     #[arg(long, default_value_t = 3, value_parser = crate::limits::ranged::<usize>(0, crate::limits::MAX_EXAMPLES as u64))]
     pub examples: usize,
@@ -74,6 +77,7 @@ pub fn run(args: &ParityArgs) -> Result<()> {
         reference: args.reference,
         stress: args.rays.0.is_none(),
         max_examples: args.examples,
+        arbiter: !args.no_arbiter,
         sweep_count: (args.sweep_count > 0).then_some(args.sweep_count),
         variants: if args.default_only {
             vec![crate::backends::AccelConfig::default()]

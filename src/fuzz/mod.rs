@@ -413,6 +413,7 @@ impl Runner {
             reference: crate::verify::hits::Reference::Brute,
             stress: false,
             max_examples: 0,
+            arbiter: true,
             sweep_count: None,
             variants: vec![AccelConfig::default()],
         };

@@ -2,10 +2,14 @@
 //! (JCGT 2013) by default, Moller-Trumbore for comparison.
 //!
 //! Both report `t` and the barycentric weights `(u, v)` of vertices 1 and 2,
-//! the convention Embree uses. Neither uses an absolute epsilon: the watertight
-//! test decides edge cases by the sign of exactly computed (double-precision
-//! fallback) edge functions, so a ray through a shared edge or vertex hits at
-//! least one of the triangles that share it.
+//! the convention Embree uses. Neither uses an absolute epsilon. The
+//! watertight test trusts a single-precision edge function's sign only when it
+//! exceeds twice its error bound ([`watertight_e_error`]); otherwise the whole
+//! triangle is decided in double precision from the float32 inputs
+//! ([`intersect_watertight_f64`]), so its hit/miss decisions are those of the
+//! exact arithmetic of `verify::hits::arbiter` except within about `2^-29` of
+//! the single-precision error, and a ray through a shared edge or vertex hits
+//! at least one of the triangles that share it.
 
 use glam::Vec3;
 
@@ -101,17 +105,103 @@ pub fn intersect_watertight(ray: &Ray, wr: &WatertightRay, v0: Vec3, v1: Vec3, v
     let by = b[ky] - s.y * b[kz];
     let cx = c[kx] - s.x * c[kz];
     let cy = c[ky] - s.y * c[kz];
-    let mut e0 = cx * by - cy * bx; // weight of v0
-    let mut e1 = ax * cy - ay * cx; // weight of v1
-    let mut e2 = bx * ay - by * ax; // weight of v2
-    if e0 == 0.0 || e1 == 0.0 || e2 == 0.0 {
-        // The ray passes (in single precision) exactly through an edge: decide
-        // the sign with exact products in double precision, as the paper does.
-        let (ax, ay, bx, by, cx, cy) = (ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64);
-        e0 = (cx * by - cy * bx) as f32;
-        e1 = (ax * cy - ay * cx) as f32;
-        e2 = (bx * ay - by * ax) as f32;
+    let e0 = cx * by - cy * bx; // weight of v0
+    let e1 = ax * cy - ay * cx; // weight of v1
+    let e2 = bx * ay - by * ax; // weight of v2
+    let az = s.z * a[kz];
+    let bz = s.z * b[kz];
+    let cz = s.z * c[kz];
+    let max_xt = ax.abs().max(bx.abs()).max(cx.abs());
+    let max_yt = ay.abs().max(by.abs()).max(cy.abs());
+    let max_zt = az.abs().max(bz.abs()).max(cz.abs());
+    if e0.abs().min(e1.abs()).min(e2.abs()) <= SIGN_MARGIN * watertight_e_error(max_xt, max_yt, max_zt) {
+        // Some edge function's single-precision sign is not certain (it is
+        // within its rounding error of 0): decide the triangle in double
+        // precision from the original vertices (module docs).
+        return intersect_watertight_f64(ray, wr, v0, v1, v2);
     }
+    if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
+        return None;
+    }
+    let det = e0 + e1 + e2;
+    let t_scaled = e0 * az + e1 * bz + e2 * cz;
+    let inv_det = 1.0 / det;
+    let t = t_scaled * inv_det;
+    if !(t >= ray.t_min && t <= ray.t_max) {
+        return None;
+    }
+    // A distance that is not provably positive in single precision (pbrt-v4,
+    // section 6.8.7: a ray spawned just off a surface must not hit that
+    // surface again because rounding turned a tiny negative t into a positive
+    // one) is decided in double precision, which accepts it only if it is
+    // provably positive there: the refusal used to lose true hits up to twice
+    // this bound away (the arbiter found them on shadow rays, issue 12).
+    if t <= watertight_t_error([ax, ay, az], [bx, by, bz], [cx, cy, cz], [e0, e1, e2], inv_det) {
+        return intersect_watertight_f64(ray, wr, v0, v1, v2);
+    }
+    Some((t, e1 * inv_det, e2 * inv_det))
+}
+
+/// How many edge-function error bounds ([`watertight_e_error`]) an edge
+/// function must exceed for its single-precision sign to be trusted: 2, so
+/// that a trusted sign belongs to an exact value at least one bound away from
+/// 0, far beyond the double-precision fallback's own error (about `2^-29`
+/// bounds), and a neighbour deciding the shared edge in double precision
+/// finds the same sign (watertightness).
+pub const SIGN_MARGIN: f32 = 2.0;
+
+/// Bound on the absolute error of the watertight test's single-precision
+/// edge functions (pbrt-v4, section 6.8.7: `delta_e`), from the largest
+/// magnitudes of the sheared vertex coordinates. It covers the rounding of
+/// `v - o`, of the shear and of the products, relative to the exact edge
+/// functions of the float32 inputs, whose signs are those of the exact edge
+/// volumes `d.(B x C)` the arbiter (`verify::hits::arbiter`) computes.
+#[inline(always)]
+pub fn watertight_e_error(max_xt: f32, max_yt: f32, max_zt: f32) -> f32 {
+    use super::offset::gamma;
+    let delta_x = gamma(5) * (max_xt + max_zt);
+    let delta_y = gamma(5) * (max_yt + max_zt);
+    2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt)
+}
+
+/// The watertight test in double precision from the float32 inputs: the
+/// fallback of [`intersect_watertight`] when a single-precision edge sign is
+/// uncertain or a distance is not provably positive.
+///
+/// Woop, Benthin and Wald fall back to double precision only when an edge
+/// function is exactly 0, and recompute it from the *single-precision*
+/// sheared coordinates; but the shear's rounding (`u (|x| + |z|)` per
+/// coordinate) is already in those, and for a grazing ray far from a small
+/// triangle it exceeds the edge function itself, so a nonzero edge function
+/// can have the wrong sign (issue 12's dragon_res3 ray: a hit 9% inside an
+/// edge at 0.07 degrees was missed). Here `v - o` (exact for float32 data of
+/// similar magnitude), the shear and the products are all double precision,
+/// whose error is about `2^-29` of the single-precision bound. Neighbours
+/// compute a shared edge's function from the same two vertices with the same
+/// operations, so they find exactly opposite values: the test stays
+/// watertight.
+#[inline(never)]
+pub fn intersect_watertight_f64(
+    ray: &Ray,
+    wr: &WatertightRay,
+    v0: Vec3,
+    v1: Vec3,
+    v2: Vec3,
+) -> Option<(f32, f32, f32)> {
+    let [kx, ky, kz] = wr.k;
+    let o = ray.origin.as_dvec3();
+    let d = ray.dir.as_dvec3();
+    let (sx, sy, sz) = (d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
+    let shear = |p: Vec3| {
+        let q = p.as_dvec3() - o;
+        (q[kx] - sx * q[kz], q[ky] - sy * q[kz], sz * q[kz])
+    };
+    let (ax, ay, az) = shear(v0);
+    let (bx, by, bz) = shear(v1);
+    let (cx, cy, cz) = shear(v2);
+    let e0 = cx * by - cy * bx;
+    let e1 = ax * cy - ay * cx;
+    let e2 = bx * ay - by * ax;
     if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
         return None;
     }
@@ -119,23 +209,27 @@ pub fn intersect_watertight(ray: &Ray, wr: &WatertightRay, v0: Vec3, v1: Vec3, v
     if det == 0.0 {
         return None;
     }
-    let az = s.z * a[kz];
-    let bz = s.z * b[kz];
-    let cz = s.z * c[kz];
-    let t_scaled = e0 * az + e1 * bz + e2 * cz;
-    let inv_det = 1.0 / det;
-    let t = t_scaled * inv_det;
-    if !(t >= ray.t_min && t <= ray.t_max) {
+    let t = (e0 * az + e1 * bz + e2 * cz) / det;
+    let t32 = t as f32;
+    if !(t32 >= ray.t_min && t32 <= ray.t_max) {
         return None;
     }
-    // Reject hits whose distance is not provably positive (pbrt-v4, section
-    // 6.8.7): a ray spawned just off a surface (geometry::offset) must not hit
-    // that surface again because rounding turned a tiny negative t into 0 or
-    // a tiny positive value. Found by the harness's shadow rays (rtdiff parity).
-    if t <= watertight_t_error([ax, ay, az], [bx, by, bz], [cx, cy, cz], [e0, e1, e2], inv_det) {
+    // The provably-positive-t check of the single-precision test, with
+    // double-precision gammas (pbrt-v4 6.8.7).
+    let g = |n: f64| n * f64::EPSILON * 0.5 / (1.0 - n * f64::EPSILON * 0.5);
+    let max_xt = ax.abs().max(bx.abs()).max(cx.abs());
+    let max_yt = ay.abs().max(by.abs()).max(cy.abs());
+    let max_zt = az.abs().max(bz.abs()).max(cz.abs());
+    let delta_z = g(3.0) * max_zt;
+    let delta_x = g(5.0) * (max_xt + max_zt);
+    let delta_y = g(5.0) * (max_yt + max_zt);
+    let delta_e = 2.0 * (g(2.0) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+    let max_e = e0.abs().max(e1.abs()).max(e2.abs());
+    let t_err = 3.0 * (g(3.0) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) / det.abs();
+    if t <= t_err {
         return None;
     }
-    Some((t, e1 * inv_det, e2 * inv_det))
+    Some((t32, (e1 / det) as f32, (e2 / det) as f32))
 }
 
 /// Bound on the absolute error of the watertight test's `t` (pbrt-v4, section
@@ -148,9 +242,7 @@ pub fn watertight_t_error(a: [f32; 3], b: [f32; 3], c: [f32; 3], e: [f32; 3], in
     let max_yt = a[1].abs().max(b[1].abs()).max(c[1].abs());
     let max_zt = a[2].abs().max(b[2].abs()).max(c[2].abs());
     let delta_z = gamma(3) * max_zt;
-    let delta_x = gamma(5) * (max_xt + max_zt);
-    let delta_y = gamma(5) * (max_yt + max_zt);
-    let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+    let delta_e = watertight_e_error(max_xt, max_yt, max_zt);
     let max_e = e[0].abs().max(e[1].abs()).max(e[2].abs());
     3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs()
 }

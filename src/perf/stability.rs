@@ -137,6 +137,7 @@ pub fn run(opts: &StabilityOptions) -> Result<StabilityReport> {
         sweep_count: None,
         stress: true,
         max_examples: 0,
+        arbiter: false,
     };
     let mut points = Vec::new();
     let mut tracers = [String::new(), String::new(), String::new()];

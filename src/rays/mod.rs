@@ -4,6 +4,7 @@
 //! lights), and the loaders that turn a scene file or a mesh into that context.
 
 pub mod context;
+pub mod near_grazing;
 pub mod rng;
 pub mod sets;
 pub mod topology;

@@ -46,6 +46,68 @@ pub fn count_failures(set: &RaySet, hits: &[Option<Hit>]) -> (u64, u64) {
     n
 }
 
+/// The heuristic class of a disagreement between `ours` and the reference's
+/// `theirs` (see [`VariantStats::classes`]): for a hit/miss difference `leak`,
+/// `silhouette`, `degenerate`, `edge`, `interval-end`, `unprovable-t` or
+/// `unclassified`; for different primitives at equal distance (within the
+/// bound) `tie`, at different distances `degenerate`, `silhouette`, `edge`,
+/// `unprovable-t` or `unclassified`. `None` when both miss or hit the same
+/// primitive. The exact arbiter ([`super::arbiter`]) checks these.
+pub fn heuristic_class(
+    ray: &Ray,
+    tag: RayTag,
+    ours: &Option<Hit>,
+    theirs: &Option<Hit>,
+    prims: &Primitives,
+) -> Option<&'static str> {
+    match (ours, theirs) {
+        (None, None) => None,
+        (Some(h), None) | (None, Some(h)) => {
+            let native_missed = ours.is_none();
+            let g = hit_geom(prims, ray, h);
+            let (tb, bb) = bounds(ray, h, &g);
+            Some(if native_missed && is_leak(ray, tag, ours, prims) {
+                "leak"
+            } else if tag == RayTag::Tangent {
+                "silhouette"
+            } else if tag == RayTag::Degenerate {
+                "degenerate"
+            } else if g.is_triangle && near_edge(h, bb) {
+                "edge"
+            } else if (h.t as f64 - ray.t_max as f64).abs() <= tb || (h.t as f64 - ray.t_min as f64).abs() <= tb {
+                "interval-end"
+            } else if native_missed && unprovable_t(prims, ray, h, tb) {
+                "unprovable-t"
+            } else {
+                "unclassified"
+            })
+        }
+        (Some(a), Some(b)) => {
+            if a.prim == b.prim {
+                return None;
+            }
+            let g = hit_geom(prims, ray, b);
+            let (tb, bb) = bounds(ray, b, &g);
+            if (a.t as f64 - b.t as f64).abs() <= tb {
+                return Some("tie");
+            }
+            let ga = hit_geom(prims, ray, a);
+            let (_, bba) = bounds(ray, a, &ga);
+            Some(if tag == RayTag::Degenerate {
+                "degenerate"
+            } else if tag == RayTag::Tangent {
+                "silhouette"
+            } else if (g.is_triangle && near_edge(b, bb)) || (ga.is_triangle && near_edge(a, bba)) {
+                "edge"
+            } else if a.t > b.t && unprovable_t(prims, ray, b, tb) {
+                "unprovable-t"
+            } else {
+                "unclassified"
+            })
+        }
+    }
+}
+
 /// One tracer's answers on a set: closest hits, and `occluded` answers on
 /// the shadow rays (`None` elsewhere).
 #[derive(Clone, Copy)]
@@ -96,30 +158,14 @@ pub fn compare(label: &str, set: &RaySet, ours: Answers, reference: Answers, max
         }
         match (&hits[i], &ref_hits[i]) {
             (None, None) => {}
-            (Some(h), None) | (None, Some(h)) => {
+            (Some(_), None) | (None, Some(_)) => {
                 let native_missed = hits[i].is_none();
                 if native_missed {
                     s.native_miss_ref_hit += 1;
                 } else {
                     s.native_hit_ref_miss += 1;
                 }
-                let g = hit_geom(prims, ray, h);
-                let (tb, bb) = bounds(ray, h, &g);
-                let class = if native_missed && is_leak(ray, tag, &hits[i], prims) {
-                    "leak"
-                } else if tag == RayTag::Tangent {
-                    "silhouette"
-                } else if tag == RayTag::Degenerate {
-                    "degenerate"
-                } else if g.is_triangle && near_edge(h, bb) {
-                    "edge"
-                } else if (h.t as f64 - ray.t_max as f64).abs() <= tb || (h.t as f64 - ray.t_min as f64).abs() <= tb {
-                    "interval-end"
-                } else if native_missed && unprovable_t(prims, ray, h, tb) {
-                    "unprovable-t"
-                } else {
-                    "unclassified"
-                };
+                let class = heuristic_class(ray, tag, &hits[i], &ref_hits[i], prims).unwrap_or("unclassified");
                 *s.classes.entry(class.to_string()).or_default() += 1;
                 let what = if native_missed { "native miss, reference hit" } else { "native hit, reference miss" };
                 example(&mut s, i, &format!("{what} ({class})"));
@@ -130,19 +176,7 @@ pub fn compare(label: &str, set: &RaySet, ours: Answers, reference: Answers, max
                 let dt = (a.t as f64 - b.t as f64).abs();
                 if a.prim != b.prim && dt > tb {
                     s.prim_diff += 1;
-                    let ga = hit_geom(prims, ray, a);
-                    let (_, bba) = bounds(ray, a, &ga);
-                    let class = if tag == RayTag::Degenerate {
-                        "degenerate"
-                    } else if tag == RayTag::Tangent {
-                        "silhouette"
-                    } else if (g.is_triangle && near_edge(b, bb)) || (ga.is_triangle && near_edge(a, bba)) {
-                        "edge"
-                    } else if a.t > b.t && unprovable_t(prims, ray, b, tb) {
-                        "unprovable-t"
-                    } else {
-                        "unclassified"
-                    };
+                    let class = heuristic_class(ray, tag, &hits[i], &ref_hits[i], prims).unwrap_or("unclassified");
                     *s.prim_classes.entry(class.to_string()).or_default() += 1;
                     example(&mut s, i, &format!("primitive and distance differ ({class})"));
                     continue;

@@ -1,10 +1,16 @@
 //! Hit parity against an independent oracle (Embree or brute force): the
 //! error bounds two correct tracers may differ by ([`bounds`]), the
-//! classification of every disagreement ([`classify`]), the run over the ray
-//! sets of [`crate::rays`] ([`run`]) and its typed report ([`report`]).
+//! classification of every disagreement ([`classify`]), the exact arbiter that
+//! decides who is right ([`arbiter`], on [`exact`] arithmetic, applied to every
+//! disagreement by [`arbitrate`]), the run over
+//! the ray sets of [`crate::rays`] ([`run`]) and its typed report ([`report`]).
 
+pub mod arbiter;
+pub mod arbitrate;
 pub mod bounds;
 pub mod classify;
+pub mod exact;
+pub mod line_index;
 pub mod report;
 pub mod run;
 

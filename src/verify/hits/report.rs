@@ -72,6 +72,8 @@ pub struct VariantStats {
     pub bary_bound_ratio_max: f64,
     /// First disagreeing rays.
     pub examples: Vec<Example>,
+    /// The exact arbiter's judgement of every disagreement (when run).
+    pub arbiter: Option<super::arbitrate::ArbiterStats>,
 }
 
 /// All comparisons on one set.
@@ -192,6 +194,11 @@ pub fn format_report(r: &ParityReport) -> String {
                 v.bary_bound_ratio_max,
                 classes.join(" ")
             );
+        }
+        for v in s.variants.iter() {
+            if let Some(a) = &v.arbiter {
+                o.push_str(&super::arbitrate::format_stats(&v.tracer, &s.reference, a));
+            }
         }
         // Replayable examples, once per distinct set of disagreements.
         let mut shown: Vec<Vec<usize>> = Vec::new();

@@ -13,6 +13,8 @@ use crate::backends::{AccelConfig, Backend, build_tracer, native_variants};
 use crate::geometry::{Hit, Primitives, Ray, TriangleTest};
 use crate::rays::{self, RayContext, RaySet, RayTag, SetKind};
 
+use super::arbiter::Arbiter;
+use super::arbitrate::{TruthCache, arbitrate};
 use super::classify::{Answers, compare, count_failures};
 use super::report::{ParityReport, SetReport, StressRow};
 
@@ -63,6 +65,8 @@ pub struct ParityOptions {
     pub stress: bool,
     /// How many disagreeing rays to keep per set and variant.
     pub max_examples: usize,
+    /// Judge every disagreement with the exact arbiter ([`super::arbitrate`]).
+    pub arbiter: bool,
 }
 
 impl Default for ParityOptions {
@@ -76,6 +80,7 @@ impl Default for ParityOptions {
             sweep_count: None,
             stress: false,
             max_examples: 5,
+            arbiter: true,
         }
     }
 }
@@ -96,6 +101,7 @@ fn occluded_all(tracer: &dyn Tracer, set: &RaySet) -> Vec<Option<bool>> {
 struct Built {
     prims: Arc<Primitives>,
     tracers: Vec<Box<dyn Tracer>>,
+    arbiter: Arbiter,
 }
 
 /// Run parity over `ctx` with `opts`.
@@ -124,11 +130,13 @@ pub fn run(ctx: &RayContext, opts: &ParityOptions) -> crate::Result<ParityReport
                     for cfg in opts.variants.iter().chain(&stress_cfgs) {
                         tracers.push(build(&set.prims, cfg)?);
                     }
-                    cache.push(Built { prims: set.prims.clone(), tracers });
+                    let arbiter = Arbiter::new(set.prims.clone());
+                    cache.push(Built { prims: set.prims.clone(), tracers, arbiter });
                     cache.len() - 1
                 }
             };
             let tracers = &cache[idx].tracers;
+            let truths = TruthCache::default();
             let ref_hits = trace_all(tracers[0].as_ref(), &set.rays);
             let ref_occ = occluded_all(tracers[0].as_ref(), &set);
             let count_tag = |f: &dyn Fn(RayTag) -> bool| set.tags.iter().filter(|&&t| f(t)).count();
@@ -164,13 +172,13 @@ pub fn run(ctx: &RayContext, opts: &ParityOptions) -> crate::Result<ParityReport
                 let (s, n) = if i == 0 { (&set, set.rays.len()) } else { (&sub, sweep) };
                 let hits = trace_all(tracer.as_ref(), &s.rays);
                 let occ = occluded_all(tracer.as_ref(), s);
-                report.variants.push(compare(
-                    &cfg.label(),
-                    s,
-                    Answers { hits: &hits, occluded: &occ },
-                    Answers { hits: &ref_hits[..n], occluded: &ref_occ[..n] },
-                    opts.max_examples,
-                ));
+                let ours = Answers { hits: &hits, occluded: &occ };
+                let theirs = Answers { hits: &ref_hits[..n], occluded: &ref_occ[..n] };
+                let mut stats = compare(&cfg.label(), s, ours, theirs, opts.max_examples);
+                if opts.arbiter {
+                    stats.arbiter = Some(arbitrate(s, ours, theirs, &cache[idx].arbiter, &truths, opts.max_examples));
+                }
+                report.variants.push(stats);
             }
             if opts.stress && kind != SetKind::Primary && kind != SetKind::Incoherent {
                 let mut leaks = [0u64; 3];

@@ -1,0 +1,262 @@
+//! Replayable rays judged by the exact arbiter (`verify::hits::arbiter`).
+
+use std::path::Path;
+use std::sync::Arc;
+
+use glam::Vec3;
+use rtdiff::accel::{BruteForce, Tracer};
+use rtdiff::backends::{AccelConfig, Backend, build_tracer};
+use rtdiff::geometry::{Hit, Triangle, TriangleTest};
+use rtdiff::geometry::{Primitives, Ray};
+use rtdiff::rays::{RaySet, RayTag, SetKind};
+use rtdiff::verify::hits::arbiter::{Arbiter, ArbiterClass, Verdict, parse_replay_line, replay_line};
+use rtdiff::verify::hits::arbitrate::{ArbiterStats, TruthCache, arbitrate};
+use rtdiff::verify::hits::classify::Answers;
+
+fn mesh(name: &str) -> Arc<Primitives> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets").join(name);
+    Arc::new(
+        rtdiff::mesh::load_mesh(&path, rtdiff::mesh::Content::Geometry)
+            .unwrap_or_else(|e| panic!("{e} (run scripts/fetch-assets.sh)"))
+            .to_primitives(),
+    )
+}
+
+/// The ray of issue 12 on `assets/dragon_res3.obj` as in the file: grazing
+/// (0.07 degrees) but well inside triangles 40850/40852, which the
+/// watertight test used to miss.
+#[test]
+fn dragon_res3_grazing_ray() {
+    let prims = mesh("dragon_res3.obj");
+    // origin 0.032898638397455215, 0.10417373478412628, 0.39105263352394104,
+    // direction 0.045490823686122894, -0.07154779136180878, -0.9963992238044739 (the issue's decimals).
+    let ray = parse_replay_line(
+        "0x1.0d8172p-5 0x1.aab214p-4 0x1.90701ap-2 0x1.74a92cp-5 -0x1.250f4cp-4 -0x1.fe280ap-1 0x0p+0 inf",
+    )
+    .unwrap();
+    let line = replay_line(&ray);
+    assert_eq!(parse_replay_line(&line).map(|r| format!("{r:?}")), Some(format!("{ray:?}")));
+    let arb = Arbiter::new(prims.clone());
+    let truth = arb.truth(&ray);
+    // The exact answer: the two windings of one triangle, 8.9% inside its
+    // nearest edge, at t = 0.3793525 (issue 12 found 0.37935254 in float64).
+    assert_eq!(truth.prims, vec![40850, 40852], "{line}");
+    let t = truth.t_f64().unwrap();
+    assert!((t - 0.3793525372355901).abs() < 1e-15, "{t}");
+    // At 0.07 degrees one rounding of the inputs moves the hit point by 0.11
+    // of this thin triangle: the margin is 0.8 units, an ill-conditioned ray.
+    assert!(truth.ill_conditioned() && truth.margin > 0.5, "margin {}", truth.margin);
+    let mut configs = vec![AccelConfig { backend: Backend::Brute, ..Default::default() }];
+    configs.extend(rtdiff::verify::hits::native_variants());
+    for cfg in &configs {
+        let tracer = build_tracer(prims.clone(), cfg).unwrap();
+        let h = tracer.intersect(&ray);
+        // Every native configuration returns the exact answer since the
+        // watertight test decides uncertain edge signs in double precision
+        // (it returned triangle 40730 behind it, at t = 0.3794166, before).
+        assert_eq!(arb.judge(&ray, &truth, h.map(|h| h.prim)), Verdict::Exact, "{:?} {h:?}", cfg);
+        let h = h.unwrap();
+        assert!((h.t as f64 - t).abs() <= 1e-7 * t, "{h:?}");
+        assert!(tracer.occluded(&Ray::with_range(ray.origin, ray.dir, 0.0, 0.37936)));
+    }
+    #[cfg(feature = "embree")]
+    {
+        let cfg = AccelConfig { backend: Backend::Embree, ..Default::default() };
+        let h = build_tracer(prims.clone(), &cfg).unwrap().intersect(&ray);
+        assert_eq!(arb.judge(&ray, &truth, h.map(|h| h.prim)), Verdict::Exact, "{h:?}");
+    }
+}
+
+fn normalised(name: &str) -> Arc<Primitives> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets").join(name);
+    rtdiff::rays::load_context(&path).unwrap_or_else(|e| panic!("{e} (run scripts/fetch-assets.sh)")).prims
+}
+
+/// Issue 12's class `reference-right` on a real tracer before the fix, and
+/// the watertight test's refusal of distances it could not prove positive:
+/// a shadow ray of `rtdiff parity assets/dragon_res4.obj --rays all --count
+/// 100000` (set shadow, ray 49083) whose first occluder is 5.9e-7 away, below
+/// the single-precision bound 2.0e-6. Native returned the occluder behind it
+/// (triangle 2125 at 0.0137); the double-precision decision proves the
+/// distance positive and returns the exact answer.
+#[test]
+fn dragon_res4_shadow_ray_near_its_origin() {
+    let prims = normalised("dragon_res4.obj");
+    let line = "-0x1.09306cp-2 0x1.c1cbfp-4 -0x1.23f1b8p-3 -0x1.7b67cap-1 0x1.c7c682p-1 -0x1.b70392p-1 0x0p+0 0x1p+0";
+    let ray = parse_replay_line(line).unwrap();
+    let arb = Arbiter::new(prims.clone());
+    let truth = arb.truth(&ray);
+    assert_eq!(truth.prims, vec![2365]);
+    assert!((truth.t_f64().unwrap() - 5.851390993650722e-7).abs() < 1e-20);
+    assert!(!truth.ill_conditioned(), "margin {}", truth.margin);
+    let [a, b, c] = prims.triangles[2365].v;
+    let bound = rtdiff::geometry::triangle::watertight_t_error_for(&ray, a, b, c).unwrap();
+    assert!(truth.t_f64().unwrap() < bound as f64, "the single-precision test cannot prove it: {bound}");
+    for cfg in rtdiff::verify::hits::native_variants() {
+        let h = build_tracer(prims.clone(), &cfg).unwrap().intersect(&ray);
+        assert_eq!(arb.judge(&ray, &truth, h.map(|h| h.prim)), Verdict::Exact, "{cfg:?}: {h:?}");
+    }
+}
+
+/// A tracer that never reports primitive `drop` (a wrong tracer on purpose).
+struct Dropper(Arc<Primitives>, u32);
+
+impl Tracer for Dropper {
+    fn name(&self) -> String {
+        "dropper".into()
+    }
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let mut prims = (*self.0).clone();
+        prims.triangles[self.1 as usize] = Triangle { v: [Vec3::ZERO; 3] };
+        BruteForce::new(Arc::new(prims), TriangleTest::Watertight).intersect(ray)
+    }
+    fn occluded(&self, ray: &Ray) -> bool {
+        self.intersect(ray).is_some()
+    }
+}
+
+/// Two parallel triangles, `z = 0` in front of `z = -1`, both covering the
+/// square [-1, 1]^2 well.
+fn two_layers() -> Arc<Primitives> {
+    let tri = |z: f32| Triangle { v: [Vec3::new(-4.0, -4.0, z), Vec3::new(4.0, -4.0, z), Vec3::new(0.0, 4.0, z)] };
+    Arc::new(Primitives { triangles: vec![tri(0.0), tri(-1.0)], spheres: vec![] })
+}
+
+fn judge_through_parity(prims: &Arc<Primitives>, line: &str, ours: &dyn Tracer, theirs: &dyn Tracer) -> ArbiterStats {
+    let ray = parse_replay_line(line).unwrap();
+    assert_eq!(replay_line(&ray).split("  #").next().unwrap(), line, "the replay line is canonical");
+    let set = RaySet {
+        name: "replay".into(),
+        kind: SetKind::Primary,
+        seed: 0,
+        prims: prims.clone(),
+        rays: vec![ray],
+        tags: vec![RayTag::Plain],
+    };
+    let (a, b) = (vec![ours.intersect(&ray)], vec![theirs.intersect(&ray)]);
+    let none = vec![None];
+    let arb = Arbiter::new(prims.clone());
+    arbitrate(
+        &set,
+        Answers { hits: &a, occluded: &none },
+        Answers { hits: &b, occluded: &none },
+        &arb,
+        &TruthCache::default(),
+        5,
+    )
+}
+
+fn only_class(s: &ArbiterStats) -> &str {
+    assert_eq!(s.judged, 1, "{s:?}");
+    s.classes.keys().next().unwrap()
+}
+
+/// Classes `native-right`, `reference-right` and `both-wrong` through the
+/// parity harness's arbitration, on a ray well inside the front triangle, with
+/// a tracer that drops it.
+#[test]
+fn native_right_reference_right_and_both_wrong() {
+    let prims = two_layers();
+    let line = "0x1.8p-2 -0x1p-2 0x1p+1 0x1p-4 0x0p+0 -0x1p+0 0x0p+0 inf";
+    let brute = BruteForce::new(prims.clone(), TriangleTest::Watertight);
+    let dropper = Dropper(prims.clone(), 0);
+    let s = judge_through_parity(&prims, line, &brute, &dropper);
+    assert_eq!(only_class(&s), "native-right");
+    assert_eq!((s.native_wrong_outside_ill_conditioned, s.reference_wrong_outside_ill_conditioned), (0, 1));
+    assert_eq!(s.reference.get("wrong"), Some(&1));
+    let s = judge_through_parity(&prims, line, &dropper, &brute);
+    assert_eq!(only_class(&s), "reference-right");
+    assert_eq!(s.native_wrong_outside_ill_conditioned, 1);
+    // The replay printed for the wrong native answer is the ray itself.
+    assert_eq!(
+        parse_replay_line(&s.replays[0].line).map(|r| format!("{r:?}")),
+        parse_replay_line(line).map(|r| format!("{r:?}"))
+    );
+    let s = judge_through_parity(&prims, line, &dropper, &Dropper(prims.clone(), 0));
+    assert_eq!(s.judged, 0, "equal answers are not a disagreement");
+    // Both wrong: one drops the front, the other hits nothing at all.
+    struct Blind;
+    impl Tracer for Blind {
+        fn name(&self) -> String {
+            "blind".into()
+        }
+        fn intersect(&self, _: &Ray) -> Option<Hit> {
+            None
+        }
+        fn occluded(&self, _: &Ray) -> bool {
+            false
+        }
+    }
+    let s = judge_through_parity(&prims, line, &dropper, &Blind);
+    assert_eq!(only_class(&s), "both-wrong");
+}
+
+/// Class `both-right`: issue 12's dragon_res3 ray hits two triangles with the
+/// same three vertices (both windings) at the same exact distance; native
+/// returns one, Embree the other.
+#[test]
+fn both_right_on_an_exact_tie() {
+    let prims = mesh("dragon_res3.obj");
+    let line = "0x1.0d8172p-5 0x1.aab214p-4 0x1.90701ap-2 0x1.74a92cp-5 -0x1.250f4cp-4 -0x1.fe280ap-1 0x0p+0 inf";
+    let ray = parse_replay_line(line).unwrap();
+    let arb = Arbiter::new(prims.clone());
+    let truth = arb.truth(&ray);
+    let native = build_tracer(prims.clone(), &AccelConfig::default()).unwrap().intersect(&ray).unwrap();
+    assert_eq!(native.prim, 40850);
+    let other = 40852; // what Embree returns (tests/embree_parity.rs and the issue)
+    let class = ArbiterClass::of(
+        arb.judge(&ray, &truth, Some(native.prim)),
+        arb.judge(&ray, &truth, Some(other)),
+        truth.ill_conditioned(),
+    );
+    assert_eq!(class, ArbiterClass::BothRight);
+    #[cfg(feature = "embree")]
+    {
+        let cfg = AccelConfig { backend: Backend::Embree, ..Default::default() };
+        assert_eq!(build_tracer(prims.clone(), &cfg).unwrap().intersect(&ray).map(|h| h.prim), Some(other));
+    }
+}
+
+/// Classes `ill-conditioned` and `both-within-bound` (and `both-wrong`) on
+/// grazing rays at the edge `y = -4` of the front triangle of [`two_layers`]
+/// (the ray passes far above the back one): the ray crosses the plane `delta`
+/// inside the edge, at 1/1024 radian. Two tracers that both miss are wrong
+/// for large `delta`, within the bound when `delta` is a few units of
+/// rounding, and the ray is ill-conditioned below one unit.
+#[test]
+fn ill_conditioned_and_both_within_bound() {
+    let prims = two_layers();
+    let arb = Arbiter::new(prims.clone());
+    let mut seen = std::collections::BTreeSet::new();
+    for k in 0..40 {
+        let delta = 2f32.powi(-k);
+        // Crosses z = 0 at (0, -4 + delta), coming from y = -4 + delta - 2048 * 2^-10 * ... along +y.
+        let target = Vec3::new(0.0, -4.0 + delta, 0.0);
+        let dir = Vec3::new(0.0, 1.0, -1.0 / 1024.0);
+        let ray = Ray::new(target - dir * 2.0, dir);
+        let truth = arb.truth(&ray);
+        if truth.prims != vec![0] {
+            continue; // rounding of the origin put it outside
+        }
+        let miss = arb.judge(&ray, &truth, None);
+        let class = ArbiterClass::of(miss, miss, truth.ill_conditioned());
+        println!(
+            "delta 2^-{k}: margin {:.3}, a miss is {miss:?}, class {class:?}: {}",
+            truth.margin,
+            replay_line(&ray)
+        );
+        match class {
+            ArbiterClass::BothWrong => assert!(truth.margin > 32.0),
+            ArbiterClass::BothWithinBound => assert!(truth.margin > 1.0 && truth.margin <= 32.0),
+            ArbiterClass::IllConditioned => assert!(truth.margin <= 1.0),
+            c => panic!("{c:?}"),
+        }
+        seen.insert(class);
+    }
+    assert!(
+        seen.contains(&ArbiterClass::BothWrong)
+            && seen.contains(&ArbiterClass::BothWithinBound)
+            && seen.contains(&ArbiterClass::IllConditioned),
+        "{seen:?}"
+    );
+}
