@@ -35,8 +35,10 @@ pub fn load_normalized_mesh(path: &Path) -> Result<Arc<Primitives>> {
 pub fn load_normalized_mesh_counted(path: &Path) -> Result<(Arc<Primitives>, usize)> {
     let mut mesh = crate::mesh::load_mesh(path, crate::mesh::Content::Geometry)?;
     crate::geometry::normalize_to_unit_sphere(&mut mesh.positions);
-    if mesh.indices.is_empty() {
-        return Err(Error::file(path, "the mesh has no (non-degenerate) triangles"));
+    // A mesh whose every triangle has zero area loads empty: the caller warns with the count
+    // (`trace`, `parity`); a mesh with no triangles at all is an error.
+    if mesh.indices.is_empty() && mesh.degenerate_skipped == 0 {
+        return Err(Error::file(path, "the mesh has no triangles"));
     }
     Ok((Arc::new(mesh.to_primitives()), mesh.degenerate_skipped))
 }
@@ -87,7 +89,13 @@ pub fn load_context_counted(path: &Path) -> Result<(RayContext, usize)> {
 pub fn load_primitives(path: &Path, normalize: bool) -> Result<Arc<Primitives>> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match ext.as_deref() {
-        _ if normalize && crate::mesh::is_mesh_file(path) => load_normalized_mesh(path),
+        _ if normalize && crate::mesh::is_mesh_file(path) => {
+            let prims = load_normalized_mesh(path)?;
+            if prims.triangles.is_empty() {
+                return Err(Error::file(path, "the mesh has no (non-degenerate) triangles"));
+            }
+            Ok(prims)
+        }
         _ if crate::mesh::is_mesh_file(path) => {
             let mesh = crate::mesh::load_mesh(path, crate::mesh::Content::Geometry)?;
             if mesh.indices.is_empty() {
