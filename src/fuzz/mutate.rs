@@ -74,7 +74,7 @@ pub fn truncate(text: &mut Vec<u8>, rng: &mut Pcg32) -> String {
 }
 
 /// Replace a random byte with a random value.
-pub fn flip_byte(text: &mut Vec<u8>, rng: &mut Pcg32) -> String {
+pub fn flip_byte(text: &mut [u8], rng: &mut Pcg32) -> String {
     if text.is_empty() {
         return "empty".into();
     }
