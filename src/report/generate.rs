@@ -124,6 +124,7 @@ pub fn generate(opts: &ReportOptions) -> Result<Generated> {
         if let Some(r) = crate::perf::mitsuba::run(&opts.root, &images, opts.quiet)? {
             sections.push(mitsuba_files(&r, opts, &mut files, &mut markdown)?);
         }
+        sections.push(heatmap_files(opts, &mut files, &mut markdown)?);
         let header: Vec<_> = machine.into_iter().collect();
         let page = super::html::page("rtdiff report", &header, &sections);
         write(&dir.join("index.html"), &page, &mut files)?;
@@ -354,6 +355,81 @@ fn mitsuba_files(
         pictures,
         command: command("all", opts),
         data: vec!["mitsuba.json".into(), "mitsuba.md".into()],
+    })
+}
+
+/// The reports' BVH variants side by side as pictures of their cost: per-pixel node visits of the
+/// dragon's render for median/basic, sah/basic and sah/fast (counted by the traversals themselves,
+/// [`crate::debug::heatmap`]), on one colour scale, with the totals per ray.
+fn heatmap_files(opts: &ReportOptions, files: &mut Vec<PathBuf>, md: &mut String) -> Result<Section> {
+    use crate::backends::{AccelConfig, Builder, Traversal};
+    use crate::debug::heatmap::Metric;
+    let dir = &opts.out;
+    let images = dir.join("images");
+    std::fs::create_dir_all(&images).map_err(|e| Error::io(&images, &e))?;
+    let size = if opts.quick { 96 } else { 400 };
+    let scene_path = opts.root.join("scenes").join("dragon.json");
+    let ov = crate::scene::Overrides { width: Some(size), height: Some(size), ..Default::default() };
+    let scene = crate::scene::Scene::load_with(&scene_path, &ov)?;
+    let variants =
+        [(Builder::Median, Traversal::Basic), (Builder::Sah, Traversal::Basic), (Builder::Sah, Traversal::Fast)];
+    let ropts = crate::render::RenderOptions { quiet: true, ..Default::default() };
+    let maps = variants
+        .iter()
+        .map(|&(builder, traversal)| {
+            let cfg = AccelConfig { builder, traversal, ..Default::default() };
+            crate::debug::heatmap(&scene, &cfg, &ropts).map(|h| (cfg.label(), h))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    // One scale for the three pictures, so that colours compare across variants.
+    let scale = maps.iter().flat_map(|(_, h)| h.counts(Metric::Nodes)).max().unwrap_or(1).max(1);
+    let mut figures = Vec::new();
+    let mut rows = Vec::new();
+    for (label, h) in &maps {
+        let name = format!("heatmap-dragon-{}.png", label.replace('/', "-"));
+        let path = images.join(&name);
+        h.write_png(Metric::Nodes, Some(scale), &path)?;
+        files.push(path);
+        let per_ray = |v: u64| v as f64 / h.totals.rays.max(1) as f64;
+        figures.push(Figure {
+            file: format!("images/{name}"),
+            caption: format!(
+                "{label}: {} node visits per ray{} (scale 0 to {scale})",
+                fmt_num(per_ray(h.totals.nodes)),
+                if h.wide { " (8-wide nodes)" } else { "" }
+            ),
+        });
+        rows.push(vec![
+            label.clone(),
+            h.totals.rays.to_string(),
+            fmt_num(per_ray(h.totals.nodes)),
+            fmt_num(per_ray(h.totals.triangles)),
+        ]);
+    }
+    let table = Table {
+        title: format!("Traversal cost on the dragon ({size}x{size}, every ray the render traces)"),
+        header: vec!["tracer".into(), "rays".into(), "node visits per ray".into(), "triangle tests per ray".into()],
+        rows,
+        notes: vec!["`fast` counts 8-wide nodes: one visit tests up to eight boxes.".into()],
+    };
+    let text = format!("## Heatmaps\n\n{}", table.to_markdown());
+    write(&dir.join("heatmaps.md"), &text, files)?;
+    md.push_str(&text);
+    md.push('\n');
+    Ok(Section {
+        id: "heatmaps".into(),
+        title: "BVH variants as pictures of their cost".into(),
+        intro: "Per-pixel node visits of the dragon's render, counted by the traversal code itself, one colour \
+                scale for all three."
+            .into(),
+        tables: vec![table],
+        figures,
+        pictures: Vec::new(),
+        command: format!(
+            "{} (one picture: rtdiff debug scenes/dragon.json --heatmap nodes --builder sah --traversal fast -o h.png)",
+            command("all", opts)
+        ),
+        data: vec!["heatmaps.md".into()],
     })
 }
 
