@@ -7,6 +7,8 @@
 //! Skipped (with a message) when `.venv/bin/python` is missing, unless
 //! `RTDIFF_REQUIRE_PYTHON=1`, as `scripts/test.sh` sets, makes that a failure.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -17,15 +19,7 @@ fn root() -> PathBuf {
 }
 
 fn python() -> Option<PathBuf> {
-    let py = root().join(".venv/bin/python");
-    if py.exists() {
-        return Some(py);
-    }
-    if std::env::var("RTDIFF_REQUIRE_PYTHON").is_ok_and(|v| v == "1") {
-        panic!("RTDIFF_REQUIRE_PYTHON=1 but {} is missing: run scripts/mitsuba/setup.sh", py.display());
-    }
-    eprintln!("image_crosscheck: skipped, {} is missing (run scripts/mitsuba/setup.sh)", py.display());
-    None
+    common::venv_python("image_crosscheck")
 }
 
 fn run(cmd: &mut Command) -> String {

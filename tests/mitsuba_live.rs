@@ -5,6 +5,8 @@
 //! `RTDIFF_REQUIRE_PYTHON=1`, so in CI a missing environment is a failure. Without
 //! that variable and without `.venv/`, the test says it is skipped and returns.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -19,15 +21,7 @@ fn root() -> PathBuf {
 }
 
 fn python() -> Option<PathBuf> {
-    let py = root().join(".venv/bin/python");
-    if py.exists() {
-        return Some(py);
-    }
-    if std::env::var("RTDIFF_REQUIRE_PYTHON").is_ok_and(|v| v == "1") {
-        panic!("RTDIFF_REQUIRE_PYTHON=1 but {} is missing: run scripts/mitsuba/setup.sh", py.display());
-    }
-    eprintln!("mitsuba_live: skipped (no .venv/; scripts/mitsuba/setup.sh makes it)");
-    None
+    common::venv_python("mitsuba_live")
 }
 
 fn run(cmd: &mut Command) -> String {

@@ -255,3 +255,18 @@ pub fn parity_rays(prims: &Primitives, n: usize, seed: u64) -> Vec<Ray> {
         })
         .collect()
 }
+
+/// The Python of `.venv/` (made by `scripts/mitsuba/setup.sh`), or `None` with a note on stderr
+/// naming `test` when it is missing; with `RTDIFF_REQUIRE_PYTHON=1` (set by `scripts/test.sh`)
+/// a missing environment fails instead of skipping.
+pub fn venv_python(test: &str) -> Option<PathBuf> {
+    let py = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python");
+    if py.exists() {
+        return Some(py);
+    }
+    if std::env::var("RTDIFF_REQUIRE_PYTHON").is_ok_and(|v| v == "1") {
+        panic!("RTDIFF_REQUIRE_PYTHON=1 but {} is missing: run scripts/mitsuba/setup.sh", py.display());
+    }
+    eprintln!("{test}: skipped, {} is missing (run scripts/mitsuba/setup.sh)", py.display());
+    None
+}
