@@ -177,8 +177,8 @@ proptest! {
         argv.extend(args);
         if let Ok(m) = cmd.try_get_matches_from(&argv) {
             let a = <rtdiff::cli::render::RenderArgs as clap::FromArgMatches>::from_arg_matches(&m).unwrap();
-            prop_assert!(a.width.is_none_or(|w| (1..=limits::MAX_IMAGE_SIDE).contains(&w)));
-            prop_assert!(a.spp.is_none_or(|s| (1..=limits::MAX_SPP).contains(&s)));
+            prop_assert!(a.image.width.is_none_or(|w| (1..=limits::MAX_IMAGE_SIDE).contains(&w)));
+            prop_assert!(a.image.spp.is_none_or(|s| (1..=limits::MAX_SPP).contains(&s)));
             prop_assert!(a.threads.is_none_or(|t| (1..=limits::MAX_THREADS).contains(&t)));
             let _ = a.overrides();
         }

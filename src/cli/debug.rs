@@ -26,9 +26,6 @@ pub struct DebugArgs {
     /// Pixel column and row (0, 0 is the top-left); the ray goes through the pixel centre.
     #[arg(long, num_args = 2, value_names = ["X", "Y"])]
     pub pixel: Vec<u32>,
-    /// Turn a feature on or off, e.g. `--feature glossy=on` (repeatable).
-    #[arg(long = "feature", value_name = "NAME=on|off")]
-    pub features: Vec<String>,
     /// Print JSON instead of the tree.
     #[arg(long)]
     pub json: bool,
@@ -62,15 +59,9 @@ pub struct DebugArgs {
     /// BVH traversal (of the render and the `traversal` overlay and heatmaps).
     #[arg(long)]
     pub traversal: Option<Traversal>,
-    /// Image width.
-    #[arg(long)]
-    pub width: Option<u32>,
-    /// Image height.
-    #[arg(long)]
-    pub height: Option<u32>,
-    /// Camera samples per pixel.
-    #[arg(long)]
-    pub spp: Option<u32>,
+    /// Image size, samples, seed and feature switches.
+    #[command(flatten)]
+    pub image: super::render::SceneFlags,
     /// Worker threads (the pictures are identical for any count).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -207,16 +198,7 @@ fn run_heatmap(args: &DebugArgs, scene: &Scene, metric: Metric) -> Result<()> {
 
 /// Run `rtdiff debug`.
 pub fn run(args: &DebugArgs) -> Result<()> {
-    let features = args.features.iter().map(|f| super::render::parse_feature(f)).collect::<Result<_>>()?;
-    let ov = Overrides {
-        features,
-        width: args.width,
-        height: args.height,
-        spp: args.spp,
-        builder: args.builder,
-        traversal: args.traversal,
-        ..Default::default()
-    };
+    let ov = Overrides { builder: args.builder, traversal: args.traversal, ..args.image.overrides()? };
     let scene = Scene::load_with(&args.scene, &ov)?;
     if args.draw.is_some() && args.heatmap.is_some() {
         return Err(Error::Invalid("--draw and --heatmap are separate pictures: give one".into()));

@@ -3,7 +3,6 @@
 use std::path::PathBuf;
 
 use crate::error::Result;
-use crate::scene::Overrides;
 use crate::scene::export::mitsuba::export_mitsuba_file;
 use crate::shading::ShadingModelKind;
 
@@ -25,21 +24,9 @@ pub struct ExportArgs {
     /// Output folder (created if missing).
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Image width.
-    #[arg(long)]
-    pub width: Option<u32>,
-    /// Image height.
-    #[arg(long)]
-    pub height: Option<u32>,
-    /// Camera samples per pixel.
-    #[arg(long)]
-    pub spp: Option<u32>,
-    /// Random seed.
-    #[arg(long)]
-    pub seed: Option<u64>,
-    /// Turn a feature on or off, e.g. `--feature normal_interpolation=off` (repeatable).
-    #[arg(long = "feature", value_name = "NAME=on|off")]
-    pub features: Vec<String>,
+    /// Image size, samples, seed and feature switches.
+    #[command(flatten)]
+    pub image: super::render::SceneFlags,
     /// Switch every material to this shading model (default: as the scene file says).
     #[arg(long, value_parser = parse_model)]
     pub model: Option<ShadingModelKind>,
@@ -61,14 +48,7 @@ fn parse_model(s: &str) -> std::result::Result<ShadingModelKind, String> {
 
 /// Run `rtdiff export`.
 pub fn run(args: &ExportArgs) -> Result<()> {
-    let ov = Overrides {
-        width: args.width,
-        height: args.height,
-        spp: args.spp,
-        seed: args.seed,
-        features: args.features.iter().map(|f| super::render::parse_feature(f)).collect::<Result<_>>()?,
-        ..Default::default()
-    };
+    let ov = args.image.overrides()?;
     let report = match args.to {
         ExportTarget::Mitsuba => export_mitsuba_file(&args.scene, &ov, args.model, &args.output)?,
     };

@@ -18,24 +18,12 @@ pub struct RenderArgs {
     /// Output image: .png (8-bit sRGB) or .exr (linear float).
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Image width (1 to 16384, at most 2^25 pixels in all).
-    #[arg(long, value_parser = limits::ranged::<u32>(1, limits::MAX_IMAGE_SIDE as u64))]
-    pub width: Option<u32>,
-    /// Image height (1 to 16384, at most 2^25 pixels in all).
-    #[arg(long, value_parser = limits::ranged::<u32>(1, limits::MAX_IMAGE_SIDE as u64))]
-    pub height: Option<u32>,
-    /// Camera samples per pixel (1 to 65536).
-    #[arg(long, value_parser = limits::ranged::<u32>(1, limits::MAX_SPP as u64))]
-    pub spp: Option<u32>,
-    /// Random seed.
-    #[arg(long)]
-    pub seed: Option<u64>,
+    /// Image size, samples, seed and feature switches.
+    #[command(flatten)]
+    pub image: SceneFlags,
     /// Worker threads, 1 to 1024 (the image is identical for any count).
     #[arg(long, value_parser = limits::ranged::<usize>(1, limits::MAX_THREADS as u64))]
     pub threads: Option<usize>,
-    /// Turn a feature on or off, e.g. `--feature bloom=on` (repeatable).
-    #[arg(long = "feature", value_name = "NAME=on|off")]
-    pub features: Vec<String>,
     /// Hit provider.
     #[arg(long)]
     pub tracer: Option<Backend>,
@@ -57,6 +45,41 @@ pub struct RenderArgs {
     /// No progress bar and no summary line.
     #[arg(short, long)]
     pub quiet: bool,
+}
+
+/// The scene overrides every scene-rendering command takes (`render`, `debug`, `export`), checked
+/// against the same limits.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct SceneFlags {
+    /// Image width (1 to 16384, at most 2^25 pixels in all).
+    #[arg(long, value_parser = limits::ranged::<u32>(1, limits::MAX_IMAGE_SIDE as u64))]
+    pub width: Option<u32>,
+    /// Image height (1 to 16384, at most 2^25 pixels in all).
+    #[arg(long, value_parser = limits::ranged::<u32>(1, limits::MAX_IMAGE_SIDE as u64))]
+    pub height: Option<u32>,
+    /// Camera samples per pixel (1 to 65536).
+    #[arg(long, value_parser = limits::ranged::<u32>(1, limits::MAX_SPP as u64))]
+    pub spp: Option<u32>,
+    /// Random seed.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Turn a feature on or off, e.g. `--feature bloom=on` (repeatable).
+    #[arg(long = "feature", value_name = "NAME=on|off")]
+    pub features: Vec<String>,
+}
+
+impl SceneFlags {
+    /// These flags as scene overrides (no accelerator choice).
+    pub fn overrides(&self) -> Result<Overrides> {
+        Ok(Overrides {
+            width: self.width,
+            height: self.height,
+            spp: self.spp,
+            seed: self.seed,
+            features: self.features.iter().map(|f| parse_feature(f)).collect::<Result<_>>()?,
+            ..Default::default()
+        })
+    }
 }
 
 fn parse_triangle_test(s: &str) -> std::result::Result<TriangleTest, String> {
@@ -86,15 +109,11 @@ impl RenderArgs {
     pub fn overrides(&self) -> Result<Overrides> {
         let args = self;
         Ok(Overrides {
-            width: args.width,
-            height: args.height,
-            spp: args.spp,
-            seed: args.seed,
-            features: args.features.iter().map(|f| parse_feature(f)).collect::<Result<_>>()?,
             backend: args.tracer,
             builder: args.builder,
             traversal: args.traversal,
             triangle_test: args.triangle_test,
+            ..args.image.overrides()?
         })
     }
 }
