@@ -15,8 +15,8 @@
 use glam::Vec3;
 
 use crate::geometry::offset::gamma;
-use crate::geometry::triangle::{SIGN_MARGIN, WatertightRay, intersect_moller_trumbore};
-use crate::geometry::{Hit, Ray, TriangleTest};
+use crate::geometry::triangle::{SIGN_MARGIN, TriangleKernel, WatertightRay};
+use crate::geometry::{Hit, Ray};
 
 use super::prims::{LeafPrims, watertight};
 
@@ -104,53 +104,44 @@ impl TriPackets {
     }
 
     /// Scalar closest-hit test of a leaf (`count` triangles from packet
-    /// `first`), with [`LeafPrims::intersect_leaf`]'s tie rule and `t_max`
-    /// update. Returns true when `best` changed.
+    /// `first`) with the triangle test `K`, with [`LeafPrims::intersect_leaf`]'s
+    /// tie rule and `t_max` update. Returns true when `best` changed.
     #[inline(always)]
-    pub fn intersect_leaf_scalar(
+    pub fn intersect_leaf_scalar<K: TriangleKernel>(
         &self,
         first: u32,
         count: u32,
         ray: &mut Ray,
         wr: &WatertightRay,
-        test: TriangleTest,
         best: &mut Option<Hit>,
     ) -> bool {
         let mut changed = false;
         for k in 0..count as usize {
             let ([a, b, c], id) = self.tri(first, k);
-            let hit = match test {
-                TriangleTest::Watertight => watertight(ray, wr, a, b, c),
-                TriangleTest::MollerTrumbore => intersect_moller_trumbore(ray, a, b, c),
-            };
-            if let Some((t, u, v)) = hit {
+            if let Some((t, u, v)) = K::intersect(ray, wr, a, b, c) {
                 changed |= offer(best, ray, t, id, u, v);
             }
         }
         changed
     }
 
-    /// Scalar any-hit test of a leaf.
+    /// Scalar any-hit test of a leaf with the triangle test `K`.
     #[inline(always)]
-    pub fn occluded_leaf_scalar(
+    pub fn occluded_leaf_scalar<K: TriangleKernel>(
         &self,
         first: u32,
         count: u32,
         ray: &Ray,
         wr: &WatertightRay,
-        test: TriangleTest,
     ) -> bool {
         (0..count as usize).any(|k| {
             let ([a, b, c], _) = self.tri(first, k);
-            match test {
-                TriangleTest::Watertight => watertight(ray, wr, a, b, c).is_some(),
-                TriangleTest::MollerTrumbore => intersect_moller_trumbore(ray, a, b, c).is_some(),
-            }
+            K::intersect(ray, wr, a, b, c).is_some()
         })
     }
 
     /// SIMD watertight closest-hit test of a leaf; same results as
-    /// [`Self::intersect_leaf_scalar`] with [`TriangleTest::Watertight`].
+    /// [`Self::intersect_leaf_scalar`] with the watertight test.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     pub fn intersect_leaf_simd(

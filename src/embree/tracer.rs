@@ -11,7 +11,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
-use super::EmbreeQuality;
+use super::{EmbreeMode, EmbreeQuality, embree_label};
 use crate::accel::Tracer;
 use crate::error::Result;
 use crate::geometry::{Hit, Primitives, Ray};
@@ -24,6 +24,7 @@ pub struct EmbreeTracer {
     scene: Scene,
     prims: Arc<Primitives>,
     quality: EmbreeQuality,
+    mode: EmbreeMode,
 }
 
 impl EmbreeTracer {
@@ -34,8 +35,18 @@ impl EmbreeTracer {
 
     /// Build over `prims` on `device` (e.g. one made with `"threads=1"` for timing).
     pub fn with_device(device: &Device, prims: Arc<Primitives>, quality: EmbreeQuality) -> Result<Self> {
-        let scene = Scene::new(device, &prims, quality)?;
-        Ok(Self { scene, prims, quality })
+        Self::with_mode(device, prims, quality, EmbreeMode::Robust)
+    }
+
+    /// Build over `prims` on `device` with the scene flags of `mode`.
+    pub fn with_mode(
+        device: &Device,
+        prims: Arc<Primitives>,
+        quality: EmbreeQuality,
+        mode: EmbreeMode,
+    ) -> Result<Self> {
+        let scene = Scene::with_mode(device, &prims, quality, mode)?;
+        Ok(Self { scene, prims, quality, mode })
     }
 
     /// The underlying scene.
@@ -132,7 +143,7 @@ impl EmbreeTracer {
 
 impl Tracer for EmbreeTracer {
     fn name(&self) -> String {
-        self.quality.label()
+        embree_label(self.quality, self.mode)
     }
 
     fn intersect(&self, ray: &Ray) -> Option<Hit> {

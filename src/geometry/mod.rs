@@ -19,4 +19,4 @@ pub use normalize::normalize_to_unit_sphere;
 pub use primitives::{Prim, Primitives, Triangle};
 pub use ray::Ray;
 pub use sphere::Sphere;
-pub use triangle::TriangleTest;
+pub use triangle::{TriangleKernel, TriangleTest};

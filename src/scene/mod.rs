@@ -332,6 +332,7 @@ impl Scene {
             leaf_size: a.leaf_size.unwrap_or(d.leaf_size).max(1),
             bins: a.bins.unwrap_or(d.bins).max(2),
             embree_quality: a.embree_quality.unwrap_or(d.embree_quality),
+            ..d
         };
 
         Ok(Self {
