@@ -30,6 +30,7 @@ pub mod traverse_ordered;
 pub mod traverse_priority_queue;
 pub mod traverse_sorted_vector;
 pub mod wide;
+pub mod wide_packet;
 
 pub use build::BinaryBvh;
 pub use count::{Count, TraversalCounts, VisitLog};
@@ -202,6 +203,32 @@ impl Tracer for BvhTracer {
         match &self.tree {
             Tree::Wide(w, k) => k.any(w, ray),
             Tree::Binary(_) => self.occluded_with(ray, &mut ()),
+        }
+    }
+
+    /// Packets of eight rays through the 8-wide tree ([`wide_packet`]); ray by ray on binary layouts.
+    fn intersect_batch(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        match &self.tree {
+            Tree::Wide(w, k) => k.closest_batch(w, rays, out),
+            Tree::Binary(_) => {
+                assert_eq!(rays.len(), out.len(), "intersect_batch: one answer per ray");
+                for (r, o) in rays.iter().zip(out) {
+                    *o = self.intersect_with(r, &mut ());
+                }
+            }
+        }
+    }
+
+    /// Packets of eight rays through the 8-wide tree; ray by ray on binary layouts.
+    fn occluded_batch(&self, rays: &[Ray], out: &mut [bool]) {
+        match &self.tree {
+            Tree::Wide(w, k) => k.any_batch(w, rays, out),
+            Tree::Binary(_) => {
+                assert_eq!(rays.len(), out.len(), "occluded_batch: one answer per ray");
+                for (r, o) in rays.iter().zip(out) {
+                    *o = self.occluded_with(r, &mut ());
+                }
+            }
         }
     }
 }

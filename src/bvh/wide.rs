@@ -390,12 +390,19 @@ pub type ClosestFn = unsafe fn(&WideBvh, &Ray) -> Option<Hit>;
 /// An any-hit entry point of one configuration.
 pub type AnyFn = unsafe fn(&WideBvh, &Ray) -> bool;
 
+/// A closest-hit entry point for a packet of up to eight rays.
+pub type Closest8Fn = unsafe fn(&WideBvh, &[Ray], &mut [Option<Hit>]);
+/// An any-hit entry point for a packet of up to eight rays.
+pub type Any8Fn = unsafe fn(&WideBvh, &[Ray], &mut [bool]);
+
 /// The monomorphised traversal entry points of one configuration (triangle
 /// test, instruction set, stack size), chosen once by [`WideBvh::kernels`].
 #[derive(Clone, Copy)]
 pub struct Kernels {
     closest: ClosestFn,
     any: AnyFn,
+    closest8: Closest8Fn,
+    any8: Any8Fn,
 }
 
 impl std::fmt::Debug for Kernels {
@@ -417,6 +424,33 @@ impl Kernels {
     pub fn any(&self, bvh: &WideBvh, ray: &Ray) -> bool {
         // SAFETY: as in `closest`.
         unsafe { (self.any)(bvh, ray) }
+    }
+
+    /// Closest hits of `rays` into `out` (same length), eight rays at a time
+    /// ([`super::wide_packet`]); the same answers as [`Self::closest`].
+    pub fn closest_batch(&self, bvh: &WideBvh, rays: &[Ray], out: &mut [Option<Hit>]) {
+        assert_eq!(rays.len(), out.len(), "closest_batch: one answer per ray");
+        if bvh.nodes.is_empty() {
+            out.fill(None);
+            return;
+        }
+        for (r, o) in rays.chunks(super::wide_packet::PACKET).zip(out.chunks_mut(super::wide_packet::PACKET)) {
+            // SAFETY: as in `closest`; the tree is not empty and each chunk holds 1 to 8 rays.
+            unsafe { (self.closest8)(bvh, r, o) };
+        }
+    }
+
+    /// Occlusion of `rays` into `out`, eight rays at a time; the same answers as [`Self::any`].
+    pub fn any_batch(&self, bvh: &WideBvh, rays: &[Ray], out: &mut [bool]) {
+        assert_eq!(rays.len(), out.len(), "any_batch: one answer per ray");
+        if bvh.nodes.is_empty() {
+            out.fill(false);
+            return;
+        }
+        for (r, o) in rays.chunks(super::wide_packet::PACKET).zip(out.chunks_mut(super::wide_packet::PACKET)) {
+            // SAFETY: as in `closest_batch`.
+            unsafe { (self.any8)(bvh, r, o) };
+        }
     }
 }
 
@@ -547,17 +581,29 @@ impl WideBvh {
         let shallow = self.levels * (WIDTH - 1) <= SHALLOW_STACK;
         #[cfg(target_arch = "x86_64")]
         if self.isa == Isa::Avx2 {
+            use super::wide_packet::{any8, closest8};
             return if shallow {
-                Kernels { closest: closest_avx2::<K, SHALLOW_STACK>, any: any_avx2::<K, SHALLOW_STACK> }
+                Kernels {
+                    closest: closest_avx2::<K, SHALLOW_STACK>,
+                    any: any_avx2::<K, SHALLOW_STACK>,
+                    closest8: closest8::<K, SHALLOW_STACK>,
+                    any8: any8::<K, SHALLOW_STACK>,
+                }
             } else {
-                Kernels { closest: closest_avx2::<K, STACK>, any: any_avx2::<K, STACK> }
+                Kernels {
+                    closest: closest_avx2::<K, STACK>,
+                    any: any_avx2::<K, STACK>,
+                    closest8: closest8::<K, STACK>,
+                    any8: any8::<K, STACK>,
+                }
             };
         }
-        if shallow {
-            Kernels { closest: closest_portable::<K, SHALLOW_STACK>, any: any_portable::<K, SHALLOW_STACK> }
+        let (closest, any): (ClosestFn, AnyFn) = if shallow {
+            (closest_portable::<K, SHALLOW_STACK>, any_portable::<K, SHALLOW_STACK>)
         } else {
-            Kernels { closest: closest_portable::<K, STACK>, any: any_portable::<K, STACK> }
-        }
+            (closest_portable::<K, STACK>, any_portable::<K, STACK>)
+        };
+        Kernels { closest, any, closest8: one_by_one_closest::<K>, any8: one_by_one_any::<K> }
     }
 
     /// Closest hit (ties: lowest primitive id).
@@ -668,7 +714,7 @@ impl WideBvh {
     /// `first`: SSE packets for the watertight test when `simd`, the
     /// per-triangle loop otherwise (same results).
     #[inline(always)]
-    fn packets_closest<K: TriangleKernel>(
+    pub(super) fn packets_closest<K: TriangleKernel>(
         &self,
         first: u32,
         count: u32,
@@ -689,7 +735,7 @@ impl WideBvh {
 
     /// Any-hit test of a triangle leaf (see [`Self::packets_closest`]).
     #[inline(always)]
-    fn packets_any<K: TriangleKernel>(
+    pub(super) fn packets_any<K: TriangleKernel>(
         &self,
         first: u32,
         count: u32,
@@ -767,6 +813,20 @@ unsafe fn any_avx2<K: TriangleKernel, const S: usize>(bvh: &WideBvh, ray: &Ray) 
     }
     // SAFETY: the caller guarantees AVX2 (`WideBvh::kernels`).
     unsafe { bvh.any_avx2_impl::<K, (), S>(ray, &mut ()) }
+}
+
+/// The portable packet entry point: each ray through the single-ray kernel.
+unsafe fn one_by_one_closest<K: TriangleKernel>(bvh: &WideBvh, rays: &[Ray], out: &mut [Option<Hit>]) {
+    for (r, o) in rays.iter().zip(out) {
+        *o = bvh.closest_portable_impl::<K, (), STACK>(r, &mut ());
+    }
+}
+
+/// The portable any-hit packet entry point.
+unsafe fn one_by_one_any<K: TriangleKernel>(bvh: &WideBvh, rays: &[Ray], out: &mut [bool]) {
+    for (r, o) in rays.iter().zip(out) {
+        *o = bvh.any_portable_impl::<K, (), STACK>(r, &mut ());
+    }
 }
 
 /// Wide nodes on the longest root-to-leaf path (0 for an empty tree).
@@ -851,5 +911,47 @@ mod tests {
         let packed: u32 = lanes.iter().filter(|&&c| c & ENTRY_LEAF == 0).sum();
         assert_eq!(packed as usize + (w.prims.len()), prims.len());
         assert!(w.prims.entries.iter().any(|e| e.id == 2000));
+    }
+
+    /// Packets of eight rays give every ray its single-ray answer, bit for
+    /// bit: coherent camera rays, incoherent rays (mixed direction signs in
+    /// one packet), a partial last packet, spheres among the triangles, and
+    /// a ray with an empty interval.
+    #[test]
+    fn packets_give_the_single_ray_answers() {
+        let mut prims = soup(3000, 9);
+        prims.spheres = vec![Sphere { center: Vec3::splat(0.5), radius: 0.1 }];
+        let b = prims.world_bounds();
+        let mut rays = crate::rays::incoherent_rays(&b, 4001, 11);
+        let eye = Vec3::new(0.5, 0.5, -2.0);
+        for i in 0..4000 {
+            let (x, y) = ((i % 64) as f32 / 64.0, (i / 64) as f32 / 64.0);
+            rays.push(Ray::new(eye, Vec3::new(x, y, 0.5) - eye));
+        }
+        rays[5].t_min = 2.0;
+        rays[5].t_max = 1.0;
+        for &scalar in &[false, true] {
+            let mut w = super::super::build_wide(&prims, &AccelConfig::default());
+            if scalar {
+                w.set_scalar();
+            }
+            let k = w.kernels(TriangleTest::Watertight);
+            let mut closest = vec![None; rays.len()];
+            let mut any = vec![false; rays.len()];
+            k.closest_batch(&w, &rays, &mut closest);
+            k.any_batch(&w, &rays, &mut any);
+            let mut hits = 0;
+            for (i, r) in rays.iter().enumerate() {
+                let one = k.closest(&w, r);
+                assert_eq!(
+                    closest[i].map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits())),
+                    one.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits())),
+                    "ray {i}"
+                );
+                assert_eq!(any[i], one.is_some(), "ray {i}");
+                hits += usize::from(one.is_some());
+            }
+            assert!(hits > 2000, "only {hits} hits");
+        }
     }
 }

@@ -168,6 +168,22 @@ impl Tracer for EmbreeTracer {
         self.convert_hit(ray, rh.ray.tfar, h.geomID, h.primID, h.u, h.v)
     }
 
+    /// Groups of eight rays through `rtcIntersect8` (Embree's 8-wide packets).
+    fn intersect_batch(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        assert_eq!(rays.len(), out.len(), "intersect_batch: one answer per ray");
+        for (r, o) in rays.chunks(8).zip(out.chunks_mut(8)) {
+            o.copy_from_slice(&self.intersect8(r)[..r.len()]);
+        }
+    }
+
+    /// Groups of eight rays through `rtcOccluded8`.
+    fn occluded_batch(&self, rays: &[Ray], out: &mut [bool]) {
+        assert_eq!(rays.len(), out.len(), "occluded_batch: one answer per ray");
+        for (r, o) in rays.chunks(8).zip(out.chunks_mut(8)) {
+            o.copy_from_slice(&self.occluded8(r)[..r.len()]);
+        }
+    }
+
     fn occluded(&self, ray: &Ray) -> bool {
         if ray.t_min > ray.t_max {
             return false;

@@ -1,0 +1,333 @@
+//! Packets of up to eight rays through the 8-wide tree: the batch entry
+//! points ([`crate::accel::Tracer::intersect_batch`] /
+//! [`crate::accel::Tracer::occluded_batch`]) for coherent rays (a tile of
+//! camera rays, the shadow rays of one surface point).
+//!
+//! The packet walks the tree once: each node is loaded once for all its
+//! rays, and each child box is tested against the eight rays at once (AVX2,
+//! rays in the lanes). The box arithmetic is the single-ray path's, lane for
+//! lane (each ray's near and far planes picked by its own direction signs,
+//! the same subtractions, multiplications and NaN-ignoring `max`/`min` in the
+//! same order), so a ray enters exactly the boxes it would enter alone, and
+//! each stacked child keeps its rays' own entry distances, so a ray whose
+//! closest hit moved nearer drops the children beyond it. Leaves are tested
+//! ray by ray with the single-ray leaf code. Each ray's answer is therefore
+//! the single-ray answer, bit for bit (the tests check it against brute
+//! force).
+
+use std::mem::MaybeUninit;
+
+use crate::geometry::triangle::{TriangleKernel, WatertightRay};
+use crate::geometry::{Hit, Ray};
+
+use super::slab::{cull_bound, far_scale};
+use super::wide::{ENTRY_LEAF, WIDTH, WideBvh};
+
+/// Rays per packet.
+pub const PACKET: usize = 8;
+
+/// A stacked child: its rays' entry distances (`+inf` for rays that missed it).
+#[derive(Clone, Copy)]
+#[repr(C, align(32))]
+struct Entry {
+    near: [f32; PACKET],
+    child: u32,
+    count: u32,
+}
+
+/// Per-packet ray data in structure-of-arrays form.
+#[derive(Clone, Copy)]
+#[repr(C, align(32))]
+struct Soa {
+    o: [[f32; PACKET]; 3],
+    inv: [[f32; PACKET]; 3],
+    inv_far: [[f32; PACKET]; 3],
+    t_min: [f32; PACKET],
+    cull: [f32; PACKET],
+}
+
+impl Soa {
+    /// Rays `rays` (at most [`PACKET`]); missing lanes repeat ray 0 and are never active.
+    #[inline(always)]
+    fn new(rays: &[Ray]) -> Self {
+        let mut s = Soa {
+            o: [[0.0; PACKET]; 3],
+            inv: [[0.0; PACKET]; 3],
+            inv_far: [[0.0; PACKET]; 3],
+            t_min: [0.0; PACKET],
+            cull: [0.0; PACKET],
+        };
+        for i in 0..PACKET {
+            let r = &rays[i.min(rays.len() - 1)];
+            // The single-ray path's per-ray constants (`WidePre`), ray by ray.
+            let inv = r.dir.recip();
+            let inv_far = inv * far_scale();
+            for a in 0..3 {
+                s.o[a][i] = r.origin[a];
+                s.inv[a][i] = inv[a];
+                s.inv_far[a][i] = inv_far[a];
+            }
+            s.t_min[i] = r.t_min;
+            s.cull[i] = cull_bound(r.t_max);
+        }
+        s
+    }
+}
+
+/// The box test of one child lane against the packet: `(hit mask, near)`.
+#[cfg(target_arch = "x86_64")]
+macro_rules! lane_box {
+    ($node:expr, $l:expr, $v:expr, $cull:expr, $active:expr) => {{
+        use std::arch::x86_64::*;
+        let (node, l) = ($node, $l);
+        let b = |row: usize| _mm256_set1_ps(node.b[row][l]);
+        let (lo_x, lo_y, lo_z, hi_x, hi_y, hi_z) = (b(0), b(1), b(2), b(3), b(4), b(5));
+        // Each ray's near plane is the max plane where its direction is negative.
+        let near_x = _mm256_blendv_ps(lo_x, hi_x, $v.neg[0]);
+        let near_y = _mm256_blendv_ps(lo_y, hi_y, $v.neg[1]);
+        let near_z = _mm256_blendv_ps(lo_z, hi_z, $v.neg[2]);
+        let far_x = _mm256_blendv_ps(hi_x, lo_x, $v.neg[0]);
+        let far_y = _mm256_blendv_ps(hi_y, lo_y, $v.neg[1]);
+        let far_z = _mm256_blendv_ps(hi_z, lo_z, $v.neg[2]);
+        let tn_x = _mm256_mul_ps(_mm256_sub_ps(near_x, $v.o[0]), $v.inv[0]);
+        let tn_y = _mm256_mul_ps(_mm256_sub_ps(near_y, $v.o[1]), $v.inv[1]);
+        let tn_z = _mm256_mul_ps(_mm256_sub_ps(near_z, $v.o[2]), $v.inv[2]);
+        let tf_x = _mm256_mul_ps(_mm256_sub_ps(far_x, $v.o[0]), $v.inv_far[0]);
+        let tf_y = _mm256_mul_ps(_mm256_sub_ps(far_y, $v.o[1]), $v.inv_far[1]);
+        let tf_z = _mm256_mul_ps(_mm256_sub_ps(far_z, $v.o[2]), $v.inv_far[2]);
+        // Operand order as in the single-ray test: a NaN slab is ignored.
+        let tn = _mm256_max_ps(tn_x, _mm256_max_ps(tn_y, _mm256_max_ps(tn_z, $v.t_min)));
+        let tf = _mm256_min_ps(tf_x, _mm256_min_ps(tf_y, _mm256_min_ps(tf_z, $cull)));
+        let hit = _mm256_and_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf), $active);
+        (hit, tn)
+    }};
+}
+
+/// The packet's rays in AVX2 registers.
+#[cfg(target_arch = "x86_64")]
+struct Regs {
+    o: [std::arch::x86_64::__m256; 3],
+    inv: [std::arch::x86_64::__m256; 3],
+    inv_far: [std::arch::x86_64::__m256; 3],
+    neg: [std::arch::x86_64::__m256; 3],
+    t_min: std::arch::x86_64::__m256,
+}
+
+#[cfg(target_arch = "x86_64")]
+macro_rules! regs {
+    ($s:expr) => {{
+        use std::arch::x86_64::*;
+        let s: &Soa = $s;
+        // SAFETY: every row is 32 bytes at a 32-byte multiple of the aligned Soa.
+        let ld = |p: &[f32; PACKET]| unsafe { _mm256_load_ps(p.as_ptr()) };
+        let inv = [ld(&s.inv[0]), ld(&s.inv[1]), ld(&s.inv[2])];
+        let z = _mm256_setzero_ps();
+        Regs {
+            o: [ld(&s.o[0]), ld(&s.o[1]), ld(&s.o[2])],
+            neg: inv.map(|i| _mm256_cmp_ps::<_CMP_LT_OQ>(i, z)),
+            inv,
+            inv_far: [ld(&s.inv_far[0]), ld(&s.inv_far[1]), ld(&s.inv_far[2])],
+            t_min: ld(&s.t_min),
+        }
+    }};
+}
+
+/// Horizontal minimum of the eight lanes.
+#[cfg(target_arch = "x86_64")]
+macro_rules! hmin {
+    ($v:expr) => {{
+        use std::arch::x86_64::*;
+        let v = $v;
+        let a = _mm256_min_ps(v, _mm256_permute2f128_ps::<1>(v, v));
+        let b = _mm256_min_ps(a, _mm256_shuffle_ps::<0b01_00_11_10>(a, a));
+        let c = _mm256_min_ps(b, _mm256_shuffle_ps::<0b10_11_00_01>(b, b));
+        _mm256_cvtss_f32(c)
+    }};
+}
+
+/// Closest hits of up to [`PACKET`] rays, answers into `out` (same length).
+///
+/// # Safety
+/// The CPU must have AVX2; `bvh` must be non-empty; `rays` holds 1 to 8 rays.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, rays: &[Ray], out: &mut [Option<Hit>]) {
+    use std::arch::x86_64::*;
+    let n = rays.len();
+    let mut soa = Soa::new(rays);
+    let v = regs!(&soa);
+    let mut r: [Ray; PACKET] = std::array::from_fn(|i| rays[i.min(n - 1)]);
+    let mut best: [Option<Hit>; PACKET] = [None; PACKET];
+    let mut wr: [Option<WatertightRay>; PACKET] = [None; PACKET];
+    let lanes = if n == PACKET { u32::MAX } else { (1u32 << n) - 1 };
+    // SAFETY: the Soa row is aligned.
+    let mut cull = unsafe { _mm256_load_ps(soa.cull.as_ptr()) };
+    let mut stack = [MaybeUninit::<Entry>::uninit(); S];
+    let mut sp = 0usize;
+    let mut cur = Entry { near: soa.t_min, child: 0, count: 0 };
+    let mut cur_mask = lanes & 0xff;
+    let inf = _mm256_set1_ps(f32::INFINITY);
+    'outer: loop {
+        if cur.count == 0 {
+            let node = &bvh.nodes[cur.child as usize];
+            let active = _mm256_castsi256_ps(_mm256_cmpgt_epi32(
+                _mm256_and_si256(_mm256_set1_epi32(cur_mask as i32), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
+                _mm256_setzero_si256(),
+            ));
+            // Hit children with their rays' entry distances, nearest first.
+            let mut hit: [(f32, u32); WIDTH] = [(0.0, 0); WIDTH];
+            let mut near = [[0.0f32; PACKET]; WIDTH];
+            let mut k = 0;
+            for l in 0..WIDTH {
+                if node.child[l] == u32::MAX {
+                    continue;
+                }
+                let (m, tn) = lane_box!(node, l, v, cull, active);
+                if _mm256_movemask_ps(m) == 0 {
+                    continue;
+                }
+                let tn = _mm256_blendv_ps(inf, tn, m);
+                // SAFETY: near[l] has room for 8 floats.
+                unsafe { _mm256_storeu_ps(near[l].as_mut_ptr(), tn) };
+                let key = hmin!(tn);
+                let mut j = k;
+                while j > 0 && hit[j - 1].0 > key {
+                    hit[j] = hit[j - 1];
+                    j -= 1;
+                }
+                hit[j] = (key, l as u32);
+                k += 1;
+            }
+            if k > 0 {
+                for &(_, l) in hit[1..k].iter().rev() {
+                    let l = l as usize;
+                    stack[sp] = MaybeUninit::new(Entry { near: near[l], child: node.child[l], count: node.count[l] });
+                    sp += 1;
+                }
+                let l = hit[0].1 as usize;
+                cur = Entry { near: near[l], child: node.child[l], count: node.count[l] };
+                // SAFETY: near[l] holds 8 floats.
+                let tn = unsafe { _mm256_loadu_ps(cur.near.as_ptr()) };
+                cur_mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, cull)) as u32;
+                continue 'outer;
+            }
+        } else {
+            let c = cur.count & !ENTRY_LEAF;
+            let mut m = cur_mask;
+            let mut changed = false;
+            while m != 0 {
+                let i = m.trailing_zeros() as usize;
+                m &= m - 1;
+                let w = wr[i].get_or_insert_with(|| WatertightRay::new(r[i].dir));
+                let closer = if cur.count & ENTRY_LEAF != 0 {
+                    bvh.prims.intersect_leaf::<K>(cur.child, c, &mut r[i], w, &mut best[i])
+                } else {
+                    bvh.packets_closest::<K>(cur.child, c, &mut r[i], w, &mut best[i], true)
+                };
+                if closer {
+                    soa.cull[i] = cull_bound(r[i].t_max);
+                    changed = true;
+                }
+            }
+            if changed {
+                // SAFETY: the Soa row is aligned.
+                cull = unsafe { _mm256_load_ps(soa.cull.as_ptr()) };
+            }
+        }
+        loop {
+            if sp == 0 {
+                break 'outer;
+            }
+            sp -= 1;
+            // SAFETY: entries below sp were written before.
+            let e = unsafe { stack[sp].assume_init() };
+            // SAFETY: e.near holds 8 floats.
+            let tn = unsafe { _mm256_loadu_ps(e.near.as_ptr()) };
+            let m = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, cull)) as u32;
+            if m != 0 {
+                cur = e;
+                cur_mask = m;
+                break;
+            }
+        }
+    }
+    out.copy_from_slice(&best[..n]);
+}
+
+/// Occlusion of up to [`PACKET`] rays, answers into `out` (same length).
+///
+/// # Safety
+/// As [`closest8`].
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+pub(super) unsafe fn any8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, rays: &[Ray], out: &mut [bool]) {
+    use std::arch::x86_64::*;
+    let n = rays.len();
+    let soa = Soa::new(rays);
+    let v = regs!(&soa);
+    // SAFETY: the Soa row is aligned.
+    let cull = unsafe { _mm256_load_ps(soa.cull.as_ptr()) };
+    let mut wr: [Option<WatertightRay>; PACKET] = [None; PACKET];
+    // Rays still looking for an occluder.
+    let mut open = if n == PACKET { 0xff } else { (1u32 << n) - 1 };
+    let all = open;
+    // Only inner nodes are stacked, with the rays that entered them.
+    let mut stack = [MaybeUninit::<(u32, u32)>::uninit(); S];
+    stack[0] = MaybeUninit::new((0, open));
+    let mut sp = 1usize;
+    let bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+    while sp > 0 {
+        sp -= 1;
+        // SAFETY: entries below sp were written before.
+        let (index, entered) = unsafe { stack[sp].assume_init() };
+        let m0 = entered & open;
+        if m0 == 0 {
+            continue;
+        }
+        let node = &bvh.nodes[index as usize];
+        let active = _mm256_castsi256_ps(_mm256_cmpgt_epi32(
+            _mm256_and_si256(_mm256_set1_epi32(m0 as i32), bits),
+            _mm256_setzero_si256(),
+        ));
+        for l in 0..WIDTH {
+            if node.child[l] == u32::MAX {
+                continue;
+            }
+            let (hm, _) = lane_box!(node, l, v, cull, active);
+            let mut m = _mm256_movemask_ps(hm) as u32 & open;
+            if m == 0 {
+                continue;
+            }
+            let count = node.count[l];
+            if count == 0 {
+                stack[sp] = MaybeUninit::new((node.child[l], m));
+                sp += 1;
+                continue;
+            }
+            let c = count & !ENTRY_LEAF;
+            while m != 0 {
+                let i = m.trailing_zeros() as usize;
+                m &= m - 1;
+                let r = &rays[i];
+                let w = wr[i].get_or_insert_with(|| WatertightRay::new(r.dir));
+                let hit = if count & ENTRY_LEAF != 0 {
+                    bvh.prims.occluded_leaf::<K>(node.child[l], c, r, w)
+                } else {
+                    bvh.packets_any::<K>(node.child[l], c, r, w, true)
+                };
+                if hit {
+                    open &= !(1 << i);
+                }
+            }
+            if open == 0 {
+                break;
+            }
+        }
+        if open == 0 {
+            break;
+        }
+    }
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = (all & !open) & (1 << i) != 0;
+    }
+}
