@@ -174,7 +174,7 @@ struct Lane {
 /// Collapse binary `bin` (depth-first, as the builders make it) into wide
 /// nodes; node 0 is the root. Empty for an empty tree.
 pub fn collapse(bin: &[Node]) -> Vec<WideNode> {
-    let mut out = Vec::with_capacity(bin.len() / 4 + 1);
+    let mut out = super::huge::vec_with_capacity(bin.len() / 4 + 1);
     if !bin.is_empty() {
         Plan::new(bin).build_node(0, &mut out);
     }

@@ -19,6 +19,7 @@ pub mod build_sah_volume;
 pub mod collapse;
 pub mod config;
 pub mod count;
+pub mod huge;
 pub mod node;
 pub mod packet;
 pub mod prims;

@@ -527,7 +527,7 @@ impl WideBvh {
                 }
             }
         }
-        let mut packets = TriPackets { packets: Vec::with_capacity(npk) };
+        let mut packets = TriPackets { packets: super::huge::vec_with_capacity(npk) };
         let mut entries = Vec::with_capacity(nent);
         let tri = |k: usize| (v(k), id(k));
         for node in &mut nodes {
