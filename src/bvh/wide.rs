@@ -537,7 +537,7 @@ impl WideBvh {
                     continue;
                 }
                 if only_triangles(first, count) {
-                    node.child[l] = packets.push_leaf_with(first, count, &tri);
+                    node.child[l] = packets.push_leaf_with(first, count, tri);
                 } else {
                     node.child[l] = entries.len() as u32;
                     node.count[l] = count | ENTRY_LEAF;

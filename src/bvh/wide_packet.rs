@@ -178,7 +178,7 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, 
             let mut hit: [(f32, u32); WIDTH] = [(0.0, 0); WIDTH];
             let mut near = [[0.0f32; PACKET]; WIDTH];
             let mut k = 0;
-            for l in 0..WIDTH {
+            for (l, near_l) in near.iter_mut().enumerate() {
                 if node.child[l] == u32::MAX {
                     continue;
                 }
@@ -187,8 +187,8 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, 
                     continue;
                 }
                 let tn = _mm256_blendv_ps(inf, tn, m);
-                // SAFETY: near[l] has room for 8 floats.
-                unsafe { _mm256_storeu_ps(near[l].as_mut_ptr(), tn) };
+                // SAFETY: near_l has room for 8 floats.
+                unsafe { _mm256_storeu_ps(near_l.as_mut_ptr(), tn) };
                 let key = hmin!(tn);
                 let mut j = k;
                 while j > 0 && hit[j - 1].0 > key {

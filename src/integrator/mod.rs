@@ -10,7 +10,7 @@ use glam::Vec3;
 
 use crate::accel::Tracer;
 use crate::features::Plan;
-use crate::geometry::Ray;
+use crate::geometry::{Hit, Ray};
 use crate::rng::Pcg32;
 use crate::scene::Scene;
 
@@ -50,6 +50,11 @@ impl Counters {
 pub trait Integrator: Send + Sync {
     /// Colour arriving at the ray origin along `ray` (a camera ray: depth 0).
     fn radiance(&self, ray: &Ray, rng: &mut Pcg32, counters: &mut Counters) -> Vec3;
+
+    /// [`Integrator::radiance`] for a camera ray whose closest hit `hit` the
+    /// caller has already traced (the renderer traces a row's camera rays as
+    /// one batch): the same colour, random numbers and counters.
+    fn radiance_with_hit(&self, ray: &Ray, hit: Option<Hit>, rng: &mut Pcg32, counters: &mut Counters) -> Vec3;
 }
 
 /// The integrators a scene can ask for (`params.integrator`); a new variant
