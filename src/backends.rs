@@ -98,14 +98,17 @@ impl Default for AccelConfig {
     }
 }
 
-/// Build the tracer `cfg` asks for over `prims`.
+/// Build the tracer `cfg` asks for over `prims`, with the threads of the
+/// calling rayon pool (every backend).
 pub fn build_tracer(prims: Arc<Primitives>, cfg: &AccelConfig) -> Result<Box<dyn Tracer>> {
     match cfg.backend {
         Backend::Brute => Ok(Box::new(BruteForce::new(prims, cfg.triangle_test))),
         Backend::Native => Ok(Box::new(crate::bvh::BvhTracer::new(&prims, cfg))),
         #[cfg(feature = "embree")]
+        // Embree builds with as many threads as the calling rayon pool has,
+        // like rtdiff's own builders.
         Backend::Embree => Ok(Box::new(crate::embree::EmbreeTracer::with_mode(
-            &crate::embree::Device::new("")?,
+            &crate::embree::Device::new(&format!("threads={}", rayon::current_num_threads()))?,
             prims,
             cfg.embree_quality,
             cfg.embree_mode,

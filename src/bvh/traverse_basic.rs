@@ -50,7 +50,7 @@ pub fn intersect_counting<K: TriangleKernel, C: Count>(bvh: &BinaryBvh, ray: &Ra
             sp += 2;
         }
     }
-    best
+    bvh.prims.finish(best, ray)
 }
 
 /// Any hit by depth-first traversal.

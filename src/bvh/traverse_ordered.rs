@@ -64,7 +64,7 @@ pub fn intersect_counting<F: Frontier, K: TriangleKernel, C: Count>(
             f.settle();
         }
     }
-    best
+    bvh.prims.finish(best, ray)
 }
 
 /// Any hit, visiting boxes in the same order (stops at the first hit).

@@ -335,7 +335,7 @@ macro_rules! closest {
                 }
             }
         }
-        best
+        $self.prims.finish(best, $ray)
     }};
 }
 
@@ -435,8 +435,14 @@ impl Kernels {
             return;
         }
         for (r, o) in rays.chunks(super::wide_packet::PACKET).zip(out.chunks_mut(super::wide_packet::PACKET)) {
-            // SAFETY: as in `closest`; the tree is not empty and each chunk holds 1 to 8 rays.
-            unsafe { (self.closest8)(bvh, r, o) };
+            if r.len() < super::wide_packet::MIN_PACKET {
+                for (r, o) in r.iter().zip(o) {
+                    *o = self.closest(bvh, r);
+                }
+            } else {
+                // SAFETY: as in `closest`; the tree is not empty and each chunk holds 1 to 8 rays.
+                unsafe { (self.closest8)(bvh, r, o) };
+            }
         }
     }
 
@@ -448,8 +454,14 @@ impl Kernels {
             return;
         }
         for (r, o) in rays.chunks(super::wide_packet::PACKET).zip(out.chunks_mut(super::wide_packet::PACKET)) {
-            // SAFETY: as in `closest_batch`.
-            unsafe { (self.any8)(bvh, r, o) };
+            if r.len() < super::wide_packet::MIN_PACKET {
+                for (r, o) in r.iter().zip(o) {
+                    *o = self.any(bvh, r);
+                }
+            } else {
+                // SAFETY: as in `closest_batch`.
+                unsafe { (self.any8)(bvh, r, o) };
+            }
         }
     }
 }
@@ -483,7 +495,7 @@ impl WideBvh {
         let nodes = super::collapse::collapse(&bvh.nodes);
         let e = &bvh.prims.entries;
         let num_triangles = bvh.prims.num_triangles;
-        Self::assemble(nodes, num_triangles, e.len(), |k| e[k].id, |k| e[k].v)
+        Self::assemble(nodes, num_triangles, bvh.prims.spheres.clone(), e.len(), |k| e[k].id, |k| e[k].v)
     }
 
     /// [`Self::from_binary`] for a tree whose primitives are not gathered yet:
@@ -498,7 +510,7 @@ impl WideBvh {
                 crate::geometry::Prim::Sphere(s) => [s.center, Vec3::new(s.radius, 0.0, 0.0), Vec3::ZERO],
             }
         };
-        Self::assemble(nodes, nt, tree.order.len(), |k| tree.order[k], vertices)
+        Self::assemble(nodes, nt, prims.spheres.clone(), tree.order.len(), |k| tree.order[k], vertices)
     }
 
     /// Point every leaf lane at its packets, or at its entries when it holds a sphere.
@@ -506,6 +518,7 @@ impl WideBvh {
     fn assemble(
         mut nodes: Vec<WideNode>,
         num_triangles: u32,
+        spheres: Vec<crate::geometry::Sphere>,
         slots: usize,
         id: impl Fn(usize) -> u32,
         v: impl Fn(usize) -> [Vec3; 3],
@@ -549,7 +562,7 @@ impl WideBvh {
             }
         }
         let packets = (num_triangles > 0).then_some(packets);
-        let prims = LeafPrims { entries, num_triangles };
+        let prims = LeafPrims { entries, num_triangles, spheres };
         Self { levels: levels(&nodes), nodes, prims, packets, isa: detect_isa() }
     }
 

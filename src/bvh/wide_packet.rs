@@ -26,6 +26,11 @@ use super::wide::{ENTRY_LEAF, WIDTH, WideBvh};
 /// Rays per packet.
 pub const PACKET: usize = 8;
 
+/// Fewer rays than this go one by one: a packet tests all eight lanes of
+/// every node for all its rays, which costs about as much as five rays
+/// walking the tree alone.
+pub const MIN_PACKET: usize = 5;
+
 /// A stacked child: its rays' entry distances (`+inf` for rays that missed it).
 #[derive(Clone, Copy)]
 #[repr(C, align(32))]
@@ -81,14 +86,21 @@ macro_rules! lane_box {
         use std::arch::x86_64::*;
         let (node, l) = ($node, $l);
         let b = |row: usize| _mm256_set1_ps(node.b[row][l]);
-        let (lo_x, lo_y, lo_z, hi_x, hi_y, hi_z) = (b(0), b(1), b(2), b(3), b(4), b(5));
-        // Each ray's near plane is the max plane where its direction is negative.
-        let near_x = _mm256_blendv_ps(lo_x, hi_x, $v.neg[0]);
-        let near_y = _mm256_blendv_ps(lo_y, hi_y, $v.neg[1]);
-        let near_z = _mm256_blendv_ps(lo_z, hi_z, $v.neg[2]);
-        let far_x = _mm256_blendv_ps(hi_x, lo_x, $v.neg[0]);
-        let far_y = _mm256_blendv_ps(hi_y, lo_y, $v.neg[1]);
-        let far_z = _mm256_blendv_ps(hi_z, lo_z, $v.neg[2]);
+        let (near_x, near_y, near_z, far_x, far_y, far_z) = if let Some([nx, ny, nz, fx, fy, fz]) = $v.rows {
+            // Every ray's direction has the same signs: the same planes for all.
+            (b(nx), b(ny), b(nz), b(fx), b(fy), b(fz))
+        } else {
+            // Each ray's near plane is the max plane where its direction is negative.
+            let (lo_x, lo_y, lo_z, hi_x, hi_y, hi_z) = (b(0), b(1), b(2), b(3), b(4), b(5));
+            (
+                _mm256_blendv_ps(lo_x, hi_x, $v.neg[0]),
+                _mm256_blendv_ps(lo_y, hi_y, $v.neg[1]),
+                _mm256_blendv_ps(lo_z, hi_z, $v.neg[2]),
+                _mm256_blendv_ps(hi_x, lo_x, $v.neg[0]),
+                _mm256_blendv_ps(hi_y, lo_y, $v.neg[1]),
+                _mm256_blendv_ps(hi_z, lo_z, $v.neg[2]),
+            )
+        };
         let tn_x = _mm256_mul_ps(_mm256_sub_ps(near_x, $v.o[0]), $v.inv[0]);
         let tn_y = _mm256_mul_ps(_mm256_sub_ps(near_y, $v.o[1]), $v.inv[1]);
         let tn_z = _mm256_mul_ps(_mm256_sub_ps(near_z, $v.o[2]), $v.inv[2]);
@@ -110,6 +122,9 @@ struct Regs {
     inv: [std::arch::x86_64::__m256; 3],
     inv_far: [std::arch::x86_64::__m256; 3],
     neg: [std::arch::x86_64::__m256; 3],
+    /// When every ray's direction has the same signs: the rows of the near
+    /// and far planes of each axis (as the single-ray test picks them).
+    rows: Option<[usize; 6]>,
     t_min: std::arch::x86_64::__m256,
 }
 
@@ -122,9 +137,16 @@ macro_rules! regs {
         let ld = |p: &[f32; PACKET]| unsafe { _mm256_load_ps(p.as_ptr()) };
         let inv = [ld(&s.inv[0]), ld(&s.inv[1]), ld(&s.inv[2])];
         let z = _mm256_setzero_ps();
+        let neg = inv.map(|i| _mm256_cmp_ps::<_CMP_LT_OQ>(i, z));
+        let signs = neg.map(|n| _mm256_movemask_ps(n));
+        let rows = signs.iter().all(|&m| m == 0 || m == 0xff).then(|| {
+            let n = signs.map(|m| usize::from(m != 0));
+            [3 * n[0], 1 + 3 * n[1], 2 + 3 * n[2], 3 - 3 * n[0], 4 - 3 * n[1], 5 - 3 * n[2]]
+        });
         Regs {
             o: [ld(&s.o[0]), ld(&s.o[1]), ld(&s.o[2])],
-            neg: inv.map(|i| _mm256_cmp_ps::<_CMP_LT_OQ>(i, z)),
+            neg,
+            rows,
             inv,
             inv_far: [ld(&s.inv_far[0]), ld(&s.inv_far[1]), ld(&s.inv_far[2])],
             t_min: ld(&s.t_min),
@@ -251,7 +273,9 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, 
             }
         }
     }
-    out.copy_from_slice(&best[..n]);
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = bvh.prims.finish(best[i], &rays[i]);
+    }
 }
 
 /// Occlusion of up to [`PACKET`] rays, answers into `out` (same length).

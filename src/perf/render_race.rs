@@ -1,8 +1,9 @@
 //! Whole renders raced: `--tracer native` against `--tracer embree` (the
 //! scene's own accelerator settings otherwise) on every scene, interleaved
 //! round by round in one process, on 1 and 2 threads, each render timed from
-//! the tracer's build to the last pixel (wall clock; post-processing is the
-//! same for both and not timed). Each scene's two images are also compared
+//! the tracer's build to the last pixel (on one thread the process's CPU
+//! time, which the machine's other load does not inflate; on more, the wall
+//! clock; post-processing is the same for both and not timed). Each scene's two images are also compared
 //! with [`crate::verify::image::agreement`] at the tolerance of
 //! `tests/embree_render.rs` (96 x 96, one sample per pixel).
 
@@ -59,12 +60,25 @@ fn with_backend(scene: &Scene, b: Backend) -> AccelConfig {
     AccelConfig { backend: b, ..scene.accel }
 }
 
-/// Build and render `scene` with `cfg` on `threads` threads: wall seconds.
+/// Build and render `scene` with `cfg` on `threads` threads: seconds (CPU
+/// time of the process on one thread, wall clock on more).
 fn timed_render(scene: &Scene, cfg: &AccelConfig, threads: usize) -> Result<f64> {
-    let start = Instant::now();
-    let tracer = build_tracer(scene.prims.clone(), cfg)?;
-    render(scene, tracer.as_ref(), &RenderOptions { threads: Some(threads), quiet: true })?;
-    Ok(start.elapsed().as_secs_f64())
+    // The build runs on the render's threads too (Embree's device takes the pool's size).
+    let work = || -> Result<()> {
+        crate::render::with_threads(Some(threads), || -> Result<()> {
+            let tracer = build_tracer(scene.prims.clone(), cfg)?;
+            render(scene, tracer.as_ref(), &RenderOptions { threads: None, quiet: true })?;
+            Ok(())
+        })?
+    };
+    if threads == 1 {
+        let (t, r) = super::clock::process_cpu_seconds(work);
+        r.map(|()| t)
+    } else {
+        let start = Instant::now();
+        work()?;
+        Ok(start.elapsed().as_secs_f64())
+    }
 }
 
 /// Race native against Embree on `scene_path`.
