@@ -54,6 +54,25 @@ pub struct TriPackets {
     pub packets: Vec<Tri4>,
 }
 
+/// Packet `c` of the leaf of triangles `first .. first + count`, where
+/// `tri(k)` gives the vertices and id of leaf slot `k`; lanes past the leaf's
+/// end repeat its last triangle.
+#[inline]
+pub fn leaf_packet(first: u32, count: u32, c: usize, tri: &impl Fn(usize) -> ([Vec3; 3], u32)) -> Tri4 {
+    let (first, count) = (first as usize, count as usize);
+    let mut p = Tri4 { v: [[0.0; PW]; 9], id: [0; PW] };
+    for l in 0..PW {
+        let (v, id) = tri(first + (PW * c + l).min(count - 1));
+        for (j, vj) in v.iter().enumerate() {
+            for a in 0..3 {
+                p.v[3 * j + a][l] = vj[a];
+            }
+        }
+        p.id[l] = id;
+    }
+    p
+}
+
 /// Packets holding `count` triangles.
 #[inline(always)]
 pub fn packets_for(count: u32) -> usize {
@@ -73,19 +92,8 @@ impl TriPackets {
     #[inline]
     pub fn push_leaf_with(&mut self, first: u32, count: u32, tri: impl Fn(usize) -> ([Vec3; 3], u32)) -> u32 {
         let start = self.packets.len() as u32;
-        let (first, count) = (first as usize, count as usize);
-        for c in (0..count).step_by(PW) {
-            let mut p = Tri4 { v: [[0.0; PW]; 9], id: [0; PW] };
-            for l in 0..PW {
-                let (v, id) = tri(first + (c + l).min(count - 1));
-                for (j, vj) in v.iter().enumerate() {
-                    for a in 0..3 {
-                        p.v[3 * j + a][l] = vj[a];
-                    }
-                }
-                p.id[l] = id;
-            }
-            self.packets.push(p);
+        for c in 0..packets_for(count) {
+            self.packets.push(leaf_packet(first, count, c, &tri));
         }
         start
     }

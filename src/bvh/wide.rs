@@ -520,8 +520,8 @@ impl WideBvh {
         num_triangles: u32,
         spheres: Vec<crate::geometry::Sphere>,
         slots: usize,
-        id: impl Fn(usize) -> u32,
-        v: impl Fn(usize) -> [Vec3; 3],
+        id: impl Fn(usize) -> u32 + Sync,
+        v: impl Fn(usize) -> [Vec3; 3] + Sync,
     ) -> Self {
         let all_triangles = num_triangles as usize == slots;
         let only_triangles =
@@ -543,6 +543,11 @@ impl WideBvh {
         let mut packets = TriPackets { packets: super::huge::vec_with_capacity(npk) };
         let mut entries = Vec::with_capacity(nent);
         let tri = |k: usize| (v(k), id(k));
+        if all_triangles && rayon::current_num_threads() > 1 && npk >= 1 << 14 {
+            pack_parallel(&mut nodes, &mut packets.packets, npk, &tri);
+            let prims = LeafPrims { entries, num_triangles, spheres };
+            return Self { levels: levels(&nodes), nodes, prims, packets: Some(packets), isa: detect_isa() };
+        }
         for node in &mut nodes {
             for l in 0..WIDTH {
                 let (first, count) = (node.child[l], node.count[l]);
@@ -840,6 +845,48 @@ unsafe fn one_by_one_any<K: TriangleKernel>(bvh: &WideBvh, rays: &[Ray], out: &m
     for (r, o) in rays.iter().zip(out) {
         *o = bvh.any_portable_impl::<K, (), STACK>(r, &mut ());
     }
+}
+
+/// The triangle packets of every leaf lane of `nodes`, written in parallel
+/// into `packets` (empty, with room for `npk`) in the order of the sequential
+/// pass (node by node, lane by lane), and each lane pointed at its first packet.
+fn pack_parallel(
+    nodes: &mut [WideNode],
+    packets: &mut Vec<super::packet::Tri4>,
+    npk: usize,
+    tri: &(impl Fn(usize) -> ([Vec3; 3], u32) + Sync),
+) {
+    use rayon::prelude::*;
+    assert!(packets.is_empty() && packets.capacity() >= npk);
+    // Each node's packets, consecutive and in node order.
+    let mut chunks = Vec::with_capacity(nodes.len());
+    let mut rest = &mut packets.spare_capacity_mut()[..npk];
+    let mut start = 0u32;
+    for node in nodes.iter() {
+        let k: usize = node.count.iter().map(|&c| packets_for(c)).sum();
+        let (head, tail) = rest.split_at_mut(k);
+        chunks.push((start, head));
+        start += k as u32;
+        rest = tail;
+    }
+    nodes.par_iter_mut().zip(chunks).with_min_len(256).for_each(|(node, (mut at, dst))| {
+        let mut w = 0;
+        for l in 0..WIDTH {
+            let (first, count) = (node.child[l], node.count[l]);
+            if count == 0 {
+                continue;
+            }
+            node.child[l] = at;
+            for c in 0..packets_for(count) {
+                dst[w].write(super::packet::leaf_packet(first, count, c, tri));
+                w += 1;
+            }
+            at += packets_for(count) as u32;
+        }
+    });
+    // SAFETY: the chunks cover the first `npk` slots exactly and every one of
+    // them was written above (each node writes all the packets it counted).
+    unsafe { packets.set_len(npk) };
 }
 
 /// Wide nodes on the longest root-to-leaf path (0 for an empty tree).
