@@ -67,9 +67,10 @@ fn main() -> rtdiff::Result<()> {
         "batch-shadow" => (&sets.shadow, true, true),
         other => return Err(rtdiff::Error::Invalid(format!("unknown set {other}"))),
     };
-    // An evenly spread subset, so a short run still covers the whole image.
-    let step = (base.len() / n.max(1)).max(1);
-    let rays: Vec<Ray> = base.iter().step_by(step).take(n).copied().collect();
+    // A contiguous block from the middle of the set (whole image rows for
+    // primary rays), so packets of consecutive rays stay coherent.
+    let start = (base.len().saturating_sub(n)) / 2;
+    let rays: Vec<Ray> = base[start..].iter().take(n).copied().collect();
     let tracer = build_tracer(prims, &cfg)?;
     let hits = trace_all(tracer.as_ref(), &rays, any, batch);
     println!("{mesh} {set} {}: {} rays, {hits} hit", tracer.name(), rays.len());
