@@ -17,7 +17,10 @@
 
 use std::mem::MaybeUninit;
 
-use crate::geometry::triangle::{TriangleKernel, WatertightRay};
+use glam::Vec3;
+
+use crate::geometry::offset::gamma;
+use crate::geometry::triangle::{SIGN_MARGIN, TriangleKernel, WatertightRay, intersect_watertight};
 use crate::geometry::{Hit, Ray};
 
 use super::slab::{cull_bound, far_scale};
@@ -167,6 +170,123 @@ macro_rules! hmin {
     }};
 }
 
+/// The packet's rays as the watertight test sees them, when they share its
+/// axis permutation: per ray, the origin on the permuted axes and the shear.
+#[cfg(target_arch = "x86_64")]
+struct Sheared {
+    k: [usize; 3],
+    o: [std::arch::x86_64::__m256; 3],
+    s: [std::arch::x86_64::__m256; 3],
+    t_min: std::arch::x86_64::__m256,
+}
+
+/// Leaves whose triangles are tested against this many of the packet's rays
+/// or more take one triangle against all eight rays at once ([`tri_x8`]).
+const SOA_LEAF_RAYS: u32 = 6;
+
+/// The watertight test of triangle `(v0, v1, v2)` against the eight rays of
+/// `sh` (rays in the lanes, `t_max` per ray): `(hit mask, uncertain mask, t,
+/// u, v)`. Lane for lane the operations of
+/// [`crate::geometry::triangle::intersect_watertight`] in the same order (as
+/// `packet::tri4_sse` does with triangles in the lanes), so a hit lane's `t,
+/// u, v` are the scalar routine's bits; uncertain lanes (an edge sign within
+/// `SIGN_MARGIN` bounds of 0, or a distance not provably positive) must be
+/// decided by the scalar routine.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn tri_x8(
+    sh: &Sheared,
+    p: &super::packet::Tri4,
+    l: usize,
+    t_max: std::arch::x86_64::__m256,
+) -> (u32, u32, [f32; PACKET], [f32; PACKET], [f32; PACKET]) {
+    use std::arch::x86_64::*;
+    let [kx, ky, kz] = sh.k;
+    let [ox, oy, oz] = sh.o;
+    let [sx, sy, sz] = sh.s;
+    // Coordinate `a` of vertex `j` of the packet's lane `l`, in every lane.
+    let b = |j: usize, a: usize| _mm256_set1_ps(p.v[3 * j + a][l]);
+    // a = v0 - o, b = v1 - o, c = v2 - o on the permuted axes.
+    let (a_x, a_y, a_z) = (_mm256_sub_ps(b(0, kx), ox), _mm256_sub_ps(b(0, ky), oy), _mm256_sub_ps(b(0, kz), oz));
+    let (b_x, b_y, b_z) = (_mm256_sub_ps(b(1, kx), ox), _mm256_sub_ps(b(1, ky), oy), _mm256_sub_ps(b(1, kz), oz));
+    let (c_x, c_y, c_z) = (_mm256_sub_ps(b(2, kx), ox), _mm256_sub_ps(b(2, ky), oy), _mm256_sub_ps(b(2, kz), oz));
+    let ax = _mm256_sub_ps(a_x, _mm256_mul_ps(sx, a_z));
+    let ay = _mm256_sub_ps(a_y, _mm256_mul_ps(sy, a_z));
+    let bx = _mm256_sub_ps(b_x, _mm256_mul_ps(sx, b_z));
+    let by = _mm256_sub_ps(b_y, _mm256_mul_ps(sy, b_z));
+    let cx = _mm256_sub_ps(c_x, _mm256_mul_ps(sx, c_z));
+    let cy = _mm256_sub_ps(c_y, _mm256_mul_ps(sy, c_z));
+    let e0 = _mm256_sub_ps(_mm256_mul_ps(cx, by), _mm256_mul_ps(cy, bx));
+    let e1 = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));
+    let e2 = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
+    let z = _mm256_setzero_ps();
+    let az = _mm256_mul_ps(sz, a_z);
+    let bz = _mm256_mul_ps(sz, b_z);
+    let cz = _mm256_mul_ps(sz, c_z);
+    // The edge functions' error bound (`watertight_e_error`, same operation order).
+    let sign = _mm256_set1_ps(-0.0);
+    let abs = |x: __m256| _mm256_andnot_ps(sign, x);
+    let max3 = |x: __m256, y: __m256, w: __m256| _mm256_max_ps(_mm256_max_ps(abs(x), abs(y)), abs(w));
+    let (max_xt, max_yt, max_zt) = (max3(ax, bx, cx), max3(ay, by, cy), max3(az, bz, cz));
+    let (g2, g3, g5) = (_mm256_set1_ps(gamma(2)), _mm256_set1_ps(gamma(3)), _mm256_set1_ps(gamma(5)));
+    let delta_x = _mm256_mul_ps(g5, _mm256_add_ps(max_xt, max_zt));
+    let delta_y = _mm256_mul_ps(g5, _mm256_add_ps(max_yt, max_zt));
+    let delta_e = _mm256_mul_ps(
+        _mm256_set1_ps(2.0),
+        _mm256_add_ps(
+            _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(g2, max_xt), max_yt), _mm256_mul_ps(delta_y, max_xt)),
+            _mm256_mul_ps(delta_x, max_yt),
+        ),
+    );
+    let min_e = _mm256_min_ps(_mm256_min_ps(abs(e0), abs(e1)), abs(e2));
+    let uncertain = _mm256_cmp_ps::<_CMP_LE_OS>(min_e, _mm256_mul_ps(_mm256_set1_ps(SIGN_MARGIN), delta_e));
+    let neg = _mm256_or_ps(
+        _mm256_or_ps(_mm256_cmp_ps::<_CMP_LT_OS>(e0, z), _mm256_cmp_ps::<_CMP_LT_OS>(e1, z)),
+        _mm256_cmp_ps::<_CMP_LT_OS>(e2, z),
+    );
+    let pos = _mm256_or_ps(
+        _mm256_or_ps(_mm256_cmp_ps::<_CMP_GT_OS>(e0, z), _mm256_cmp_ps::<_CMP_GT_OS>(e1, z)),
+        _mm256_cmp_ps::<_CMP_GT_OS>(e2, z),
+    );
+    let det = _mm256_add_ps(_mm256_add_ps(e0, e1), e2);
+    let t_scaled = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(e0, az), _mm256_mul_ps(e1, bz)), _mm256_mul_ps(e2, cz));
+    let inv_det = _mm256_div_ps(_mm256_set1_ps(1.0), det);
+    let t = _mm256_mul_ps(t_scaled, inv_det);
+    // Ordered comparisons: a NaN t fails both, as `!(t >= t_min && t <= t_max)` rejects it.
+    let in_range = _mm256_and_ps(_mm256_cmp_ps::<_CMP_GE_OS>(t, sh.t_min), _mm256_cmp_ps::<_CMP_LE_OS>(t, t_max));
+    let reject = _mm256_or_ps(_mm256_and_ps(neg, pos), uncertain);
+    let ok = _mm256_andnot_ps(reject, in_range);
+    let zero_mask = _mm256_movemask_ps(uncertain) as u32;
+    if _mm256_movemask_ps(ok) == 0 {
+        return (0, zero_mask, [0.0; PACKET], [0.0; PACKET], [0.0; PACKET]);
+    }
+    // The provably-positive-t check of `watertight_t_error` (pbrt-v4 6.8.7), same operation order.
+    let delta_z = _mm256_mul_ps(g3, max_zt);
+    let max_e = max3(e0, e1, e2);
+    let t_err = _mm256_mul_ps(
+        _mm256_mul_ps(
+            _mm256_set1_ps(3.0),
+            _mm256_add_ps(
+                _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(g3, max_e), max_zt), _mm256_mul_ps(delta_e, max_zt)),
+                _mm256_mul_ps(delta_z, max_e),
+            ),
+        ),
+        abs(inv_det),
+    );
+    let not_positive = _mm256_and_ps(_mm256_cmp_ps::<_CMP_LE_OS>(t, t_err), ok);
+    let ok = _mm256_andnot_ps(not_positive, ok);
+    let zero_mask = zero_mask | _mm256_movemask_ps(not_positive) as u32;
+    let (mut ts, mut us, mut vs) = ([0.0f32; PACKET], [0.0f32; PACKET], [0.0f32; PACKET]);
+    // SAFETY: each array has room for 8 floats; storeu has no alignment requirement.
+    unsafe {
+        _mm256_storeu_ps(ts.as_mut_ptr(), t);
+        _mm256_storeu_ps(us.as_mut_ptr(), _mm256_mul_ps(e1, inv_det));
+        _mm256_storeu_ps(vs.as_mut_ptr(), _mm256_mul_ps(e2, inv_det));
+    }
+    (_mm256_movemask_ps(ok) as u32, zero_mask, ts, us, vs)
+}
+
 /// Closest hits of up to [`PACKET`] rays, answers into `out` (same length).
 ///
 /// # Safety
@@ -181,6 +301,8 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, 
     let mut r: [Ray; PACKET] = std::array::from_fn(|i| rays[i.min(n - 1)]);
     let mut best: [Option<Hit>; PACKET] = [None; PACKET];
     let mut wr: [Option<WatertightRay>; PACKET] = [None; PACKET];
+    // Made at the first leaf that enough rays reach: None when the rays do not share an axis permutation.
+    let mut sheared: Option<Option<Sheared>> = None;
     let lanes = if n == PACKET { u32::MAX } else { (1u32 << n) - 1 };
     // SAFETY: the Soa row is aligned.
     let mut cull = unsafe { _mm256_load_ps(soa.cull.as_ptr()) };
@@ -233,6 +355,52 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, 
                 cur_mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, cull)) as u32;
                 continue 'outer;
             }
+        } else if K::WATERTIGHT
+            && cur.count & ENTRY_LEAF == 0
+            && cur_mask.count_ones() >= SOA_LEAF_RAYS
+            && let Some(sh) = sheared.get_or_insert_with(|| shear8(&r, &mut wr)).as_ref()
+            && let Some(pk) = &bvh.packets
+        {
+            // One triangle against all the rays at once.
+            let c = cur.count as usize;
+            let mut changed = false;
+            let mut t_max = _mm256_setr_ps(
+                r[0].t_max, r[1].t_max, r[2].t_max, r[3].t_max, r[4].t_max, r[5].t_max, r[6].t_max, r[7].t_max,
+            );
+            for k in 0..c {
+                let p = &pk.packets[cur.child as usize + k / super::packet::PW];
+                let l = k % super::packet::PW;
+                let (ok, unc, t, u, vv) = tri_x8(sh, p, l, t_max);
+                let (mut ok, mut unc) = (ok & cur_mask, unc & cur_mask);
+                let mut closer = false;
+                while unc != 0 {
+                    let i = unc.trailing_zeros() as usize;
+                    unc &= unc - 1;
+                    let w = wr[i].as_ref().expect("made by shear8");
+                    let v = [0, 1, 2].map(|j| Vec3::new(p.v[3 * j][l], p.v[3 * j + 1][l], p.v[3 * j + 2][l]));
+                    if let Some((t, u, v2)) = intersect_watertight(&r[i], w, v[0], v[1], v[2]) {
+                        closer |= Hit::offer(&mut best[i], &mut r[i], Hit { t, prim: p.id[l], u, v: v2 });
+                    }
+                }
+                while ok != 0 {
+                    let i = ok.trailing_zeros() as usize;
+                    ok &= ok - 1;
+                    closer |= Hit::offer(&mut best[i], &mut r[i], Hit { t: t[i], prim: p.id[l], u: u[i], v: vv[i] });
+                }
+                if closer {
+                    t_max = _mm256_setr_ps(
+                        r[0].t_max, r[1].t_max, r[2].t_max, r[3].t_max, r[4].t_max, r[5].t_max, r[6].t_max, r[7].t_max,
+                    );
+                    changed = true;
+                }
+            }
+            if changed {
+                for (c, ri) in soa.cull.iter_mut().zip(&r) {
+                    *c = cull_bound(ri.t_max);
+                }
+                // SAFETY: the Soa row is aligned.
+                cull = unsafe { _mm256_load_ps(soa.cull.as_ptr()) };
+            }
         } else {
             let c = cur.count & !ENTRY_LEAF;
             let mut m = cur_mask;
@@ -276,6 +444,27 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, 
     for (i, o) in out.iter_mut().enumerate() {
         *o = bvh.prims.finish(best[i], &rays[i]);
     }
+}
+
+/// The shear of every ray (into `wr`), and the packet as [`Sheared`] when
+/// all eight rays share the axis permutation.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn shear8(r: &[Ray; PACKET], wr: &mut [Option<WatertightRay>; PACKET]) -> Option<Sheared> {
+    use std::arch::x86_64::*;
+    let w: [WatertightRay; PACKET] =
+        std::array::from_fn(|i| *wr[i].get_or_insert_with(|| WatertightRay::new(r[i].dir)));
+    let k = w[0].k;
+    if w.iter().any(|x| x.k != k) {
+        return None;
+    }
+    let lanes = |f: &dyn Fn(usize) -> f32| _mm256_setr_ps(f(0), f(1), f(2), f(3), f(4), f(5), f(6), f(7));
+    Some(Sheared {
+        k,
+        o: [0, 1, 2].map(|a| lanes(&|i| r[i].origin[k[a]])),
+        s: [lanes(&|i| w[i].s.x), lanes(&|i| w[i].s.y), lanes(&|i| w[i].s.z)],
+        t_min: lanes(&|i| r[i].t_min),
+    })
 }
 
 /// Occlusion of up to [`PACKET`] rays, answers into `out` (same length).
