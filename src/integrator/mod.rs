@@ -22,7 +22,9 @@ pub struct Counters {
     pub primary_rays: u64,
     /// Reflection, glossy and transmission rays.
     pub secondary_rays: u64,
-    /// Shadow (visibility) rays.
+    /// Shadow (visibility) queries to the tracer: one per shadow ray, one
+    /// more when transparency is on and the ray is blocked (its closest
+    /// blocker is then traced), and one per transparent surface crossed.
     pub shadow_rays: u64,
     /// Texture lookups.
     pub texture_lookups: u64,

@@ -113,6 +113,16 @@ impl<'a> Whitted<'a> {
         if !self.plan.transparency && !R::ACTIVE {
             return if self.tracer.occluded(&ray) { 0.0 } else { 1.0 };
         }
+        if self.plan.transparency {
+            // Any hit first: a clear ray transmits everything (what the walk
+            // would find); only a blocked one is traced again for its
+            // closest blocker (a second query, counted).
+            if !self.tracer.occluded(&ray) {
+                rec.shadow_ray(&ray, None);
+                return 1.0;
+            }
+            c.shadow_rays += 1;
+        }
         self.transmitted(ray, target, c, rec)
     }
 
@@ -156,7 +166,11 @@ impl<'a> Whitted<'a> {
             let vis = match (batch.occluded[k], self.plan.transparency) {
                 (false, _) => 1.0,
                 (true, false) => 0.0,
-                (true, true) => self.transmitted(batch.rays[k], batch.targets[k], c, &mut NoRecorder),
+                (true, true) => {
+                    // Traced again for its closest blocker, as in `visibility`.
+                    c.shadow_rays += 1;
+                    self.transmitted(batch.rays[k], batch.targets[k], c, &mut NoRecorder)
+                }
             };
             *sum += vis * batch.f[k];
         }
