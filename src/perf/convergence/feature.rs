@@ -6,9 +6,7 @@ use crate::light::LightSampling;
 use crate::scene::file::{MaterialSpec, SceneFile};
 
 /// Most random light samples Mitsuba's plugin renders in one pass (more are split into passes).
-pub const MITSUBA_LIGHT_SAMPLES_PER_KERNEL: u32 = 64;
-/// Most jittered light samples Mitsuba's plugin renders (one kernel, compiled once per count).
-pub const MITSUBA_JITTERED_MAX: u32 = 256;
+pub const MITSUBA_LIGHT_SAMPLES_PER_KERNEL: u32 = 16;
 
 fn gcd(a: u32, b: u32) -> u32 {
     if b == 0 { a } else { gcd(b, a % b) }
@@ -78,21 +76,23 @@ impl Feature {
 
     /// How Mitsuba renders `n` samples: the count written into the exported
     /// scene and the passes over it (`None`: the scene's own), or why it
-    /// cannot. The plugin unrolls its light samples into one JIT kernel, whose
-    /// compilation grows faster than the count (64 jittered samples: 12 s, 256:
-    /// 31 s, 1024: unfinished after 10 minutes, on this project's machine). Random
-    /// light samples are independent, so `n` of them are `n / L` passes of `L`;
-    /// jittered ones are stratified over all `n` and cannot be split.
-    pub fn mitsuba_plan(self, n: u32) -> std::result::Result<(u32, Option<u32>), String> {
+    /// does not. The plugin unrolls its light samples into one JIT kernel, whose
+    /// compilation grows faster than the count (on this project's loaded
+    /// machine, first time: 16 samples 5 s, 64: 20 s, 256: 85 s, 1024:
+    /// unfinished after 10 minutes; Dr.Jit caches kernels on disk after that).
+    /// Random light samples are independent, so `n` of them are `n / L` passes
+    /// of `L`; jittered ones are stratified over all `n` and cannot be split:
+    /// above `jittered_max` they are not rendered.
+    pub fn mitsuba_plan(self, n: u32, jittered_max: u32) -> std::result::Result<(u32, Option<u32>), String> {
         match self {
             Feature::AreaRandom if n > MITSUBA_LIGHT_SAMPLES_PER_KERNEL => {
                 let l = gcd(n, MITSUBA_LIGHT_SAMPLES_PER_KERNEL);
                 Ok((l, Some(n / l)))
             }
-            Feature::AreaJittered if n > MITSUBA_JITTERED_MAX => Err(format!(
+            Feature::AreaJittered if n > jittered_max => Err(format!(
                 "{n} jittered light samples are not rendered by Mitsuba: its plugin unrolls them into one JIT \
-                 kernel, and beyond {MITSUBA_JITTERED_MAX} the kernel takes too long to compile (1024: over 10 \
-                 minutes); jittered samples cannot be split across passes"
+                 kernel, whose compilation beyond {jittered_max} samples takes too long for this report (1024: \
+                 over 10 minutes), and jittered samples cannot be split across passes"
             )),
             _ => Ok((n, None)),
         }

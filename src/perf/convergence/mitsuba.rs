@@ -52,7 +52,7 @@ fn run(
     let mut counts = Vec::new();
     let mut notes = Vec::new();
     for (i, &n) in opts.counts.iter().enumerate() {
-        let (in_scene, passes) = match feature.mitsuba_plan(n) {
+        let (in_scene, passes) = match feature.mitsuba_plan(n, opts.mitsuba_jittered_max) {
             Ok(plan) => plan,
             Err(why) => {
                 notes.push(why);

@@ -31,7 +31,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-pub use feature::{Feature, MITSUBA_JITTERED_MAX, MITSUBA_LIGHT_SAMPLES_PER_KERNEL};
+pub use feature::{Feature, MITSUBA_LIGHT_SAMPLES_PER_KERNEL};
 pub use fit::{LogLogFit, crossing, error_at_time, fit_loglog, time_to_error};
 
 use crate::error::{Error, Result};
@@ -70,6 +70,8 @@ pub struct ConvergenceOptions {
     pub repeat_budget: u32,
     /// Sweep Mitsuba too, where it is set up and the feature has a Mitsuba mapping.
     pub mitsuba: bool,
+    /// Most jittered light samples Mitsuba renders ([`Feature::mitsuba_plan`]).
+    pub mitsuba_jittered_max: u32,
     /// Scratch folder for Mitsuba's exported scenes and renders (removed afterwards).
     pub work: PathBuf,
     /// Where to write the side-by-side images (render at `show_count`, reference, difference, FLIP), if anywhere.
@@ -94,6 +96,7 @@ impl ConvergenceOptions {
             target_rel_mse: 1e-3,
             repeat_budget: 256,
             mitsuba: true,
+            mitsuba_jittered_max: 256,
             work: std::env::temp_dir().join(format!("rtdiff-convergence-{}", std::process::id())),
             images: None,
             show_count: 16,
@@ -101,7 +104,8 @@ impl ConvergenceOptions {
         }
     }
 
-    /// Small and fast (CI): 48 x 48, counts 1..64, rtdiff references of 1024 samples, fit up to 64.
+    /// Small and fast (CI): 48 x 48, counts 1..64, rtdiff references of 1024 samples, fit up to 64,
+    /// Mitsuba's jittered light samples up to 16 (a fresh machine compiles each count's kernel).
     pub fn quick(root: &Path) -> Self {
         Self {
             size: 48,
@@ -109,6 +113,7 @@ impl ConvergenceOptions {
             reference_count: 1024,
             fit_max: 64,
             repeat_budget: 64,
+            mitsuba_jittered_max: 16,
             ..Self::full(root)
         }
     }
