@@ -386,7 +386,7 @@ fn heatmap_files(e: &mut Emit) -> Result<Section> {
     let dir = &opts.out;
     let images = dir.join("images");
     std::fs::create_dir_all(&images).map_err(|e| Error::io(&images, &e))?;
-    let size = if opts.quick { 96 } else { 400 };
+    let size = if opts.quick { 160 } else { 400 };
     let scene_path = opts.root.join("scenes").join("dragon.json");
     let ov = crate::scene::Overrides { width: Some(size), height: Some(size), ..Default::default() };
     let scene = crate::scene::Scene::load_with(&scene_path, &ov)?;

@@ -70,7 +70,7 @@ p.note{font-size:12px;color:#555;max-width:1100px}\
 figure{margin:16px 0}figure img{max-width:100%;border:1px solid #ddd}\
 code{background:#f4f4f4;padding:2px 5px}\
 .cmd{font-size:12px;color:#333}\
-.figs{display:flex;gap:16px;align-items:flex-start;flex-wrap:wrap}.figs figure{margin:8px 0}\
+.figs{display:flex;gap:16px;align-items:flex-start;flex-wrap:wrap}.figs figure{margin:8px 0;width:min-content}.figs img{max-width:none}\
 .pics{display:flex;gap:10px;align-items:flex-start;flex-wrap:wrap}\
 .pics figure{margin:0;width:256px}.pics figcaption{font-size:13px}\
 .pics img{width:256px;image-rendering:pixelated}\

@@ -132,12 +132,26 @@ fn tick_label(v: f64) -> String {
     }
 }
 
+/// The axis range around data from `lo` to `hi` (mapped values), with a margin. A linear axis
+/// whose data are all zero spans 0 to 1 (not a sliver around zero with negative ticks), and one
+/// whose data are not negative keeps its margin below zero small.
 fn padded(lo: f64, hi: f64, scale: Scale) -> (f64, f64) {
     if !lo.is_finite() || !hi.is_finite() {
         return (0.0, 1.0);
     }
+    if scale == Scale::Linear && lo >= 0.0 {
+        let span = if hi > lo { hi - lo } else { hi.max(1.0) };
+        return (lo - 0.03 * span, hi.max(lo + span) + 0.06 * span);
+    }
     let span = (hi - lo).max(if scale == Scale::Log { 0.5 } else { hi.abs().max(1.0) * 0.1 });
     (lo - 0.06 * span, hi + 0.06 * span)
+}
+
+/// Raise the top of a y range `y0..y1` so that a legend of `entries` lines in an upper corner sits
+/// above the data instead of on it (a legend line is about 15 of the plot's ~420 pixels).
+fn legend_headroom(y0: f64, y1: f64, entries: usize) -> f64 {
+    let share = ((entries as f64 * 15.0 + 20.0) / 420.0).min(0.6);
+    y0 + (y1 - y0) / (1.0 - share)
 }
 
 /// An axis over `lo..hi` (mapped values) with the scale's labelled ticks and grid lines
@@ -180,6 +194,7 @@ pub fn categories(path: &Path, title: &str, y_desc: &str, labels: &[String], ser
         all.iter().copied().fold(f64::NEG_INFINITY, f64::max),
         ys,
     );
+    let y1 = legend_headroom(y0, y1, series.len());
     let n = labels.len().max(1);
     let width = (140 + 95 * n as u32).max(700);
     let root = SVGBackend::new(path, (width, 520)).into_drawing_area();
@@ -270,14 +285,14 @@ pub struct Panel<'a> {
     pub legend: Legend,
 }
 
-/// Width of one panel, in SVG pixels.
-const PANEL_WIDTH: u32 = 760;
+/// Width of one panel, in SVG pixels (two fit a 1400-pixel window).
+const PANEL_WIDTH: u32 = 660;
 /// Height of one panel.
 const PANEL_HEIGHT: u32 = 520;
 /// Height of one line of notes under the panels.
 const NOTE_LINE: u32 = 18;
 /// Characters per line of notes (wrapped at spaces).
-const NOTE_CHARS: usize = 120;
+const NOTE_CHARS: usize = 100;
 
 /// Lines in an x-y plot with the given axis scales.
 pub fn lines(
@@ -345,6 +360,7 @@ where
     };
     let (x0, x1) = padded(fold(|p| p.0, true), fold(|p| p.0, false), xs);
     let (y0, y1) = padded(fold(|p| p.1, true), fold(|p| p.1, false), ys);
+    let y1 = legend_headroom(y0, y1, p.lines.len());
     let mut chart = ChartBuilder::on(area)
         .caption(p.title, ("sans-serif", 20))
         .margin(12)
