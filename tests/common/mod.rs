@@ -15,6 +15,24 @@ use rtdiff::mesh::{Content, Mesh, load_mesh as load_mesh_file};
 use rtdiff::render::{RenderOptions, RenderResult, render};
 use rtdiff::rng::Pcg32;
 use rtdiff::scene::{Scene, SceneFile};
+/// The repository's root folder.
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Run `cmd` and return its standard output; a failure to start or a non-zero exit panics
+/// with the command and both outputs.
+pub fn run(cmd: &mut std::process::Command) -> String {
+    let out = cmd.output().unwrap_or_else(|e| panic!("{cmd:?}: {e}"));
+    assert!(
+        out.status.success(),
+        "{cmd:?} failed:\n{}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
 /// Every scene file in `scenes/`, sorted.
 pub fn scene_files() -> Vec<PathBuf> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
