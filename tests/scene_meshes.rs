@@ -20,10 +20,10 @@ fn entry(i: usize) -> serde_json::Value {
         "file": "q.obj",
         "transform": { "scale": [1.0 + 0.01 * f, 1.0, -1.0], "rotate": [f, 2.0 * f, 0.5 * f], "translate": [f, -0.5 * f, 0.25] }
     });
-    if i % 3 == 0 {
+    if i.is_multiple_of(3) {
         e["normalize"] = true.into();
     }
-    if i % 5 == 0 {
+    if i.is_multiple_of(5) {
         e["material_overrides"] = serde_json::json!({ "red": "gold" });
     }
     e
