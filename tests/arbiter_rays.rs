@@ -43,9 +43,10 @@ fn dragon_res3_grazing_ray() {
     assert_eq!(truth.prims, vec![40850, 40852], "{line}");
     let t = truth.t_f64().unwrap();
     assert!((t - 0.3793525372355901).abs() < 1e-15, "{t}");
-    // At 0.07 degrees one rounding of the inputs moves the hit point by 0.11
-    // of this thin triangle: the margin is 0.8 units, an ill-conditioned ray.
-    assert!(truth.ill_conditioned() && truth.margin > 0.5, "margin {}", truth.margin);
+    // At 0.07 degrees the hit is still about two one-unit perturbations of
+    // the inputs from the nearest edge (margin 1.95): a well-conditioned ray,
+    // which every tracer must get exactly.
+    assert!(!truth.ill_conditioned() && truth.margin < 2.5, "margin {}", truth.margin);
     let mut configs = vec![AccelConfig { backend: Backend::Brute, ..Default::default() }];
     configs.extend(rtdiff::verify::hits::native_variants());
     for cfg in &configs {
