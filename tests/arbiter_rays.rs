@@ -9,7 +9,7 @@ use rtdiff::backends::{AccelConfig, Backend, build_tracer};
 use rtdiff::geometry::{Hit, Triangle, TriangleTest};
 use rtdiff::geometry::{Primitives, Ray};
 use rtdiff::rays::{RaySet, RayTag, SetKind};
-use rtdiff::verify::hits::arbiter::{Arbiter, ArbiterClass, Verdict, parse_replay_line, replay_line};
+use rtdiff::verify::hits::arbiter::{Arbiter, ArbiterClass, Exact, Truth, Verdict, parse_replay_line, replay_line};
 use rtdiff::verify::hits::arbitrate::{ArbiterStats, TruthCache, arbitrate};
 use rtdiff::verify::hits::classify::Answers;
 
@@ -262,6 +262,28 @@ fn ill_conditioned_and_both_within_bound() {
     );
 }
 
+/// The replayed ray `line`, its arbiter and exact answer, and the exact
+/// evaluations of the two hit primitives `front` (the answer) and `back`,
+/// whose exact distances (compared by cross-multiplication) differ by `gap`.
+fn near_tie(
+    prims: &Arc<Primitives>,
+    line: &str,
+    front: u32,
+    back: u32,
+    gap: f64,
+) -> (Ray, Arbiter, Truth, Exact, Exact) {
+    let ray = parse_replay_line(line).unwrap();
+    let arb = Arbiter::new(prims.clone());
+    let truth = arb.truth(&ray);
+    assert_eq!(truth.prims, vec![front]);
+    let (f, b) = (arb.evaluate(&ray, front), arb.evaluate(&ray, back));
+    assert!(f.hit && b.hit);
+    let (tf, tb) = (f.t.as_ref().unwrap(), b.t.as_ref().unwrap());
+    assert_eq!(tf.cmp_exact(tb), std::cmp::Ordering::Less);
+    assert!((tb.diff_f64(tf) - gap).abs() < 1e-12, "gap {}", tb.diff_f64(tf));
+    (ray, arb, truth, f, b)
+}
+
 /// Near ties in distance are ordered exactly, and their conditioning decides
 /// the class. A grazing ray of `rtdiff parity assets/suzanne.obj --rays all
 /// --count 1000000` (set grazing, ray 876803) meets triangle 448 (grazed,
@@ -277,15 +299,7 @@ fn ill_conditioned_and_both_within_bound() {
 fn near_tie_in_distance_reversed_by_a_grazing_hit() {
     let prims = normalised("suzanne.obj");
     let line = "0x1.6c0b2p-3 0x1.5192d6p-2 0x1.eabe68p-4 -0x1.7a02ccp-1 -0x1.ae30d8p-2 -0x1.0e28a2p-1 0x0p+0 inf";
-    let ray = parse_replay_line(line).unwrap();
-    let arb = Arbiter::new(prims.clone());
-    let truth = arb.truth(&ray);
-    assert_eq!(truth.prims, vec![448]);
-    let (front, back) = (arb.evaluate(&ray, 448), arb.evaluate(&ray, 2));
-    assert!(front.hit && back.hit);
-    assert_eq!(front.t.as_ref().unwrap().cmp_exact(back.t.as_ref().unwrap()), std::cmp::Ordering::Less);
-    let gap = back.t.as_ref().unwrap().diff_f64(front.t.as_ref().unwrap());
-    assert!((gap - 2.5254683e-6).abs() < 1e-12, "{gap}");
+    let (ray, arb, truth, front, back) = near_tie(&prims, line, 448, 2, 2.5254683e-6);
     // Well inside both (the hit/miss decisions are not what is uncertain).
     assert!(front.inside > 30.0 && back.inside > 1e5, "{} {}", front.inside, back.inside);
     assert!(truth.ill_conditioned() && (truth.margin - 0.0897).abs() < 1e-3, "margin {}", truth.margin);
@@ -353,14 +367,7 @@ fn near_tie_in_distance_at_normal_incidence() {
 fn near_tie_in_distance_well_conditioned_on_dragon_res2() {
     let prims = normalised("dragon_res2.obj");
     let line = "-0x1.806684p-1 0x1.1acde6p+0 0x1.0a91a8p+1 0x1.63b23ap-3 -0x1.6bb228p-2 -0x1.d648ecp-1 0x0p+0 inf";
-    let ray = parse_replay_line(line).unwrap();
-    let arb = Arbiter::new(prims.clone());
-    let truth = arb.truth(&ray);
-    assert_eq!(truth.prims, vec![159012]);
-    let (front, back) = (arb.evaluate(&ray, 159012), arb.evaluate(&ray, 159010));
-    let (tf, tb) = (front.t.as_ref().unwrap(), back.t.as_ref().unwrap());
-    assert_eq!(tf.cmp_exact(tb), std::cmp::Ordering::Less);
-    assert!((tb.diff_f64(tf) - 3.416562e-7).abs() < 1e-12, "{}", tb.diff_f64(tf));
+    let (ray, arb, truth, front, back) = near_tie(&prims, line, 159012, 159010, 3.416562e-7);
     assert!(front.inside > 300.0 && back.inside > 300.0);
     assert!(!truth.ill_conditioned() && (truth.margin - 1.3445).abs() < 1e-3, "margin {}", truth.margin);
     // Correctly rounded, the two distances are different floats.

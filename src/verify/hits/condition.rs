@@ -203,6 +203,18 @@ mod tests {
         assert_eq!(s.minus(&s).kappa(o, d), 0.0);
     }
 
+    /// `sum_i |dq/dx_i| |x_i|` with central differences.
+    fn finite_difference_kappa<const N: usize>(q: impl Fn([f64; N]) -> f64, x0: [f64; N]) -> f64 {
+        (0..N)
+            .map(|i| {
+                let (mut a, mut b) = (x0, x0);
+                a[i] += 1e-6;
+                b[i] -= 1e-6;
+                ((q(a) - q(b)) / 2e-6).abs() * x0[i].abs()
+            })
+            .sum()
+    }
+
     /// `kappa` of the edge volume and the discriminant against the sum of
     /// |finite-difference derivative| x |input|.
     #[test]
@@ -230,14 +242,7 @@ mod tests {
             vq.y as f64,
             vq.z as f64,
         ];
-        let kappa: f64 = (0..12)
-            .map(|i| {
-                let (mut a, mut b) = (x0, x0);
-                a[i] += 1e-6;
-                b[i] -= 1e-6;
-                ((w(a) - w(b)) / 2e-6).abs() * x0[i].abs()
-            })
-            .sum();
+        let kappa = finite_difference_kappa(w, x0);
         assert!((kappa - edge_volume_kappa(o, d, vp, vq)).abs() < 1e-6 * kappa, "{kappa}");
         let (c, r) = (Vec3::new(0.2, 0.3, 3.0), 0.75f32);
         let disc = |x: [f64; 10]| {
@@ -246,14 +251,7 @@ mod tests {
             f.dot(d).powi(2) - d.dot(d) * (f.dot(f) - x[9] * x[9])
         };
         let x0 = [o.x, o.y, o.z, d.x, d.y, d.z, c.x as f64, c.y as f64, c.z as f64, r as f64];
-        let kappa: f64 = (0..10)
-            .map(|i| {
-                let (mut a, mut b) = (x0, x0);
-                a[i] += 1e-6;
-                b[i] -= 1e-6;
-                ((disc(a) - disc(b)) / 2e-6).abs() * x0[i].abs()
-            })
-            .sum();
+        let kappa = finite_difference_kappa(disc, x0);
         assert!((kappa - sphere_disc_kappa(o, d, c, r)).abs() < 1e-6 * kappa, "{kappa}");
     }
 }
