@@ -85,7 +85,7 @@ use serde::Serialize;
 use super::condition::{self, Sensitivity, U, units};
 use super::exact::{self, BigVec, ExactT, fixed, fixed3};
 use super::line_index::LineIndex;
-use crate::geometry::{Primitives, Ray};
+use crate::geometry::{Prim, Primitives, Ray};
 
 /// Units of rounding a correct float32 tracer may accumulate (the parity
 /// harness's `K`, `hits::bounds` / module docs of the parity harness).
@@ -275,13 +275,12 @@ impl Arbiter {
         let dl = d.length();
         let p = o + d * t;
         let mag = o.abs().max_element() + p.abs().max_element();
-        let nt = self.prims.triangles.len();
-        let (n, bb_geom) = if (prim as usize) < nt {
-            let pre = &self.pre[prim as usize];
-            (pre.n / pre.n_len, pre.longest / pre.n_len)
-        } else {
-            let s = self.prims.spheres[prim as usize - nt];
-            ((p - s.center.as_dvec3()).normalize_or_zero(), f64::INFINITY)
+        let (n, bb_geom) = match self.prims.get(prim as usize) {
+            Prim::Triangle(_) => {
+                let pre = &self.pre[prim as usize];
+                (pre.n / pre.n_len, pre.longest / pre.n_len)
+            }
+            Prim::Sphere(s) => ((p - s.center.as_dvec3()).normalize_or_zero(), f64::INFINITY),
         };
         let c = (d.dot(n) / dl).abs().max(1e-300);
         let plane = U * mag / c;
@@ -370,7 +369,7 @@ impl Arbiter {
     /// Exact evaluation of sphere `j` (global id `nt + j`).
     fn exact_sphere(&self, ray: &Ray, j: usize, o: &BigVec, d: &BigVec) -> Exact {
         let s = self.prims.spheres[j];
-        let prim = (self.prims.triangles.len() + j) as u32;
+        let prim = self.prims.sphere_id(j);
         let f = exact::sub(o, &fixed3(s.center));
         let a = exact::dot(d, d);
         let b = -exact::dot(&f, d);
@@ -452,11 +451,9 @@ impl Arbiter {
     pub fn evaluate(&self, ray: &Ray, prim: u32) -> Exact {
         let o = fixed3(ray.origin);
         let d = fixed3(ray.dir);
-        let nt = self.prims.triangles.len();
-        if (prim as usize) < nt {
-            self.exact_triangle(ray, prim as usize, &o, &d)
-        } else {
-            self.exact_sphere(ray, prim as usize - nt, &o, &d)
+        match self.prims.sphere_index(prim as usize) {
+            None => self.exact_triangle(ray, prim as usize, &o, &d),
+            Some(j) => self.exact_sphere(ray, j, &o, &d),
         }
     }
 
@@ -517,18 +514,16 @@ impl Arbiter {
         if p == q {
             return true;
         }
-        let nt = self.prims.triangles.len();
-        match ((p as usize) < nt, (q as usize) < nt) {
-            (true, true) => {
-                let key = |i: u32| {
-                    let mut k = self.prims.triangles[i as usize].v.map(|v| [v.x, v.y, v.z].map(f32::to_bits));
+        match (self.prims.get(p as usize), self.prims.get(q as usize)) {
+            (Prim::Triangle(a), Prim::Triangle(b)) => {
+                let key = |t: &crate::geometry::Triangle| {
+                    let mut k = t.v.map(|v| [v.x, v.y, v.z].map(f32::to_bits));
                     k.sort_unstable();
                     k
                 };
-                key(p) == key(q)
+                key(a) == key(b)
             }
-            (false, false) => {
-                let (a, b) = (self.prims.spheres[p as usize - nt], self.prims.spheres[q as usize - nt]);
+            (Prim::Sphere(a), Prim::Sphere(b)) => {
                 a.center.to_array().map(f32::to_bits) == b.center.to_array().map(f32::to_bits)
                     && a.radius.to_bits() == b.radius.to_bits()
             }
