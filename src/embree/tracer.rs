@@ -6,6 +6,10 @@
 //! interval. Its sphere test (`SphereIntersector1`) uses the open interval
 //! `tnear < t < tfar`; the two differ only for hits exactly at an end point
 //! (a set of measure zero that no ray set aims at).
+//!
+//! Rays that are not [`Ray::is_traceable`] never reach Embree: its kernels
+//! assume valid rays (unless built with `EMBREE_IGNORE_INVALID_RAYS`), and a
+//! NaN direction crashes `rtcIntersect1`. They hit nothing, as in every tracer.
 
 use std::sync::Arc;
 
@@ -86,7 +90,7 @@ impl EmbreeTracer {
         let mut rh = ffi::RTCRayHit8::default();
         let mut valid = ffi::Valid8::default();
         for (k, r) in rays.iter().enumerate() {
-            if r.t_min > r.t_max {
+            if !r.is_traceable() {
                 continue;
             }
             valid.0[k] = -1;
@@ -116,7 +120,7 @@ impl EmbreeTracer {
         let mut r8 = ffi::RTCRay8::default();
         let mut valid = ffi::Valid8::default();
         for (k, r) in rays.iter().enumerate() {
-            if r.t_min > r.t_max {
+            if !r.is_traceable() {
                 continue;
             }
             valid.0[k] = -1;
@@ -136,7 +140,7 @@ impl Tracer for EmbreeTracer {
     }
 
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        if ray.t_min > ray.t_max {
+        if !ray.is_traceable() {
             return None;
         }
         let mut rh = ffi::RTCRayHit {
@@ -158,7 +162,7 @@ impl Tracer for EmbreeTracer {
     }
 
     fn occluded(&self, ray: &Ray) -> bool {
-        if ray.t_min > ray.t_max {
+        if !ray.is_traceable() {
             return false;
         }
         let mut r = Self::rtc_ray(ray);
