@@ -531,6 +531,76 @@ fn a_scene_scaled_by_a_power_of_two_to_the_coordinate_limit_renders_bit_identica
     }
 }
 
+/// The long fuzz run's other panics: `spheres.json` with a sphere of radius 0.75
+/// moved to z = 4294967295 or 1e12, where one unit in the last place of the
+/// centre is 512 or 131072: the sphere's surface cannot be told from its centre.
+/// Such a sphere is refused at load time (spheres near the origin are not
+/// affected); one at the limit ratio renders.
+#[test]
+fn spheres_too_small_for_their_centres_magnitude_are_refused() {
+    let d = temp_dir("hostile-small-sphere");
+    let sphere_scene = |z: f64, r: f64| {
+        format!(
+            r#"{{ "image": {{ "width": 6, "height": 6 }}, "shading_model": "phong",
+                 "camera": {{ "position": [0, 0, {}], "look_at": [0, 0, {z}], "fov": 30 }},
+                 "spheres": [ {{ "center": [0, 0, 6], "radius": 1 }}, {{ "center": [0, 0, {z}], "radius": {r} }} ],
+                 "lights": [ {{ "type": "point", "position": [1, 1, {}], "color": [1, 1, 1] }} ] }}"#,
+            z - 4.0 * r,
+            z - 3.0 * r
+        )
+    };
+    for z in [4_294_967_295.0, 1e12] {
+        let e = load(&d, &sphere_scene(z, 0.75)).expect_err("refused").to_string();
+        assert!(e.contains("s.json") && e.contains("spheres[1].radius") && e.contains("2^-20"), "{e}");
+    }
+    // At the ratio (z = 1e6, radius 2^-20 * 1e6 = 0.95): it loads, and the camera
+    // 4 radii away sees it in the middle pixels, lit and finite.
+    let z = 1e6f64;
+    let r = z * limits::MIN_SPHERE_RADIUS_RELATIVE as f64;
+    let s = load(&d, &sphere_scene(z, r)).expect("at the ratio");
+    let img = render_ok(&s).image;
+    assert!(img.pixels.iter().all(|p| p.is_finite()));
+    assert!(img.pixels[2 * 6 + 2].max_element() > 0.0, "centre pixel {:?}", img.pixels[2 * 6 + 2]);
+    let e = load(&d, &sphere_scene(z, r * 0.999)).expect_err("past the ratio").to_string();
+    assert!(e.contains("spheres[1].radius") && e.contains("below the limit"), "{e}");
+}
+
+#[test]
+fn primitive_count_limit_names_the_mesh_and_the_limit() {
+    use rtdiff::scene::validate::check_primitive_total;
+    let p = Path::new("s.json");
+    let max = limits::MAX_PRIMITIVES;
+    check_primitive_total(p, "meshes[1]", "a.obj", max - 10, 10).expect("at the limit");
+    let e = check_primitive_total(p, "meshes[1]", "a.obj", max - 10, 11).expect_err("past").to_string();
+    assert!(e.contains("s.json") && e.contains("meshes[1] (a.obj)") && e.contains("over the limit of 67108864"), "{e}");
+    // No overflow for absurd counts.
+    assert!(check_primitive_total(p, "meshes[0]", "a.obj", usize::MAX, usize::MAX).is_err());
+}
+
+/// A gzip bomb: a small file that decompresses without end. Decompression stops
+/// one byte past the limit (`limits::MAX_MESH_FILE_BYTES` for `load_mesh`; a
+/// small limit here, through the same function) with an error naming the file.
+#[test]
+fn gzip_decompression_is_capped() {
+    use std::io::Write;
+    let d = temp_dir("hostile-gzip");
+    let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\n".repeat(1 << 16) + "f 1 2 3\n"; // 1.5 MiB
+    let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::best());
+    enc.write_all(text.as_bytes()).expect("gzip");
+    let gz = d.join("bomb.obj.gz");
+    std::fs::write(&gz, enc.finish().expect("gzip")).expect("write");
+    assert!(std::fs::metadata(&gz).unwrap().len() < 16 << 10, "compresses well");
+    let n = text.len() as u64;
+    let at = rtdiff::mesh::compressed::read_bytes_limited(&gz, n).expect("at the limit");
+    assert_eq!(at.len() as u64, n);
+    let e = rtdiff::mesh::compressed::read_bytes_limited(&gz, n - 1).expect_err("past the limit").to_string();
+    assert!(e.contains("bomb.obj.gz") && e.contains(&format!("more than {} bytes", n - 1)), "{e}");
+    // Through load_mesh (the real limit, 4 GiB): the file loads.
+    let m = rtdiff::mesh::load_mesh(&gz, rtdiff::mesh::Content::Geometry).expect("loads");
+    assert_eq!(m.indices.len(), 1);
+    assert_eq!(limits::MAX_MESH_FILE_BYTES, 4 << 30);
+}
+
 /// A mesh file's raw vertices may be anything finite (a transform brings them
 /// within the coordinate limit); their face normals' products overflowed f32
 /// beyond ~1e19 and the vertex normals came out zero (black shading).

@@ -71,10 +71,17 @@ pub fn load_mesh(path: &Path, content: Content) -> Result<Mesh> {
             ));
         }
     };
-    match format {
+    let mesh = match format {
         Format::Obj => obj::load(path, encoding::decode_text(bytes).0, content),
         Format::Ply => ply::load(path, &bytes, content),
+    }?;
+    if mesh.indices.len() > crate::limits::MAX_PRIMITIVES {
+        return Err(Error::file(
+            path,
+            format!("{} triangles, over the limit of {} primitives", mesh.indices.len(), crate::limits::MAX_PRIMITIVES),
+        ));
     }
+    Ok(mesh)
 }
 
 /// Where a material's texture was named: for errors that point at the MTL line.

@@ -258,6 +258,8 @@ impl Scene {
             warnings.append(&mut mesh.warnings);
             place_mesh(&mut mesh, spec);
             validate::check_mesh_bounds(path, &format!("meshes[{mi}]"), &spec.file, &mesh.positions)?;
+            let before = prims.triangles.len() + file.spheres.len();
+            validate::check_primitive_total(path, &format!("meshes[{mi}]"), &spec.file, before, mesh.indices.len())?;
             let forced = match &spec.material {
                 Some(name) => Some(lookup(name, &format!("mesh {} ({})", mi + 1, spec.file))?),
                 None => None,
