@@ -90,7 +90,8 @@ mod tests {
         for dir in [Vec3::new(2.0 * m, 0.0, 0.0), Vec3::new(2.0 * m, 2.0 * m, 2.0 * m)] {
             let r = Ray::with_range(-dir * 0.5, dir, 0.0, 1.0);
             let t = s.intersect(&r).expect("hit").0;
-            let exact = 0.5 - 0.1 / (dir.length() as f64 / (2.0 * m as f64));
+            // Entry at |origin| - r = |dir| / 2 - 0.1 m along the ray: t = 0.5 - 0.1 m / |dir|.
+            let exact = 0.5 - 0.1 * m as f64 / dir.as_dvec3().length();
             // A few roundings of a quantity of size ~1 (eps = 1.2e-7).
             assert!((t as f64 - exact).abs() < 1e-6, "t = {t}, exact {exact}");
         }
