@@ -332,12 +332,12 @@ fn crc32(data: &[u8]) -> u32 {
 #[test]
 fn ray_csv_limits() {
     let p = Path::new("rays.csv");
-    let ok = rtdiff::cli::trace::parse_rays(p, "1e12,0,0,0,0,1,0,inf\n").expect("at the limit");
+    let ok = rtdiff::rays::file::parse_rays(p, "1e12,0,0,0,0,1,0,inf\n").expect("at the limit");
     assert_eq!(ok.len(), 1);
     let e =
-        rtdiff::cli::trace::parse_rays(p, "0,0,0,0,0,1,0,1\n1.1e12,0,0,0,0,1,0,inf\n").expect_err("past").to_string();
+        rtdiff::rays::file::parse_rays(p, "0,0,0,0,0,1,0,1\n1.1e12,0,0,0,0,1,0,inf\n").expect_err("past").to_string();
     assert!(e.contains("rays.csv") && e.contains("line 2") && e.contains("1e12"), "{e}");
-    let e = rtdiff::cli::trace::parse_rays(p, "0,0,0,0,0,1e39,0,1\n").expect_err("inf").to_string();
+    let e = rtdiff::rays::file::parse_rays(p, "0,0,0,0,0,1e39,0,1\n").expect_err("inf").to_string();
     assert!(e.contains("line 1") && e.contains("finite"), "{e}");
 }
 
@@ -539,13 +539,14 @@ fn a_scene_scaled_by_a_power_of_two_to_the_coordinate_limit_renders_bit_identica
 #[test]
 fn spheres_too_small_for_their_centres_magnitude_are_refused() {
     let d = temp_dir("hostile-small-sphere");
+    // The camera 4 radii in front of the sphere (at the origin when that rounds onto the centre).
     let sphere_scene = |z: f64, r: f64| {
+        let eye = if (z - 4.0 * r) as f32 == z as f32 { 0.0 } else { z - 4.0 * r };
         format!(
             r#"{{ "image": {{ "width": 6, "height": 6 }}, "shading_model": "phong",
-                 "camera": {{ "position": [0, 0, {}], "look_at": [0, 0, {z}], "fov": 30 }},
+                 "camera": {{ "position": [0, 0, {eye}], "look_at": [0, 0, {z}], "fov": 30 }},
                  "spheres": [ {{ "center": [0, 0, 6], "radius": 1 }}, {{ "center": [0, 0, {z}], "radius": {r} }} ],
                  "lights": [ {{ "type": "point", "position": [1, 1, {}], "color": [1, 1, 1] }} ] }}"#,
-            z - 4.0 * r,
             z - 3.0 * r
         )
     };
@@ -570,11 +571,11 @@ fn primitive_count_limit_names_the_mesh_and_the_limit() {
     use rtdiff::scene::validate::check_primitive_total;
     let p = Path::new("s.json");
     let max = limits::MAX_PRIMITIVES;
-    check_primitive_total(p, "meshes[1]", "a.obj", max - 10, 10).expect("at the limit");
-    let e = check_primitive_total(p, "meshes[1]", "a.obj", max - 10, 11).expect_err("past").to_string();
+    check_primitive_total(p, "meshes[1] (a.obj)", max - 10, 10).expect("at the limit");
+    let e = check_primitive_total(p, "meshes[1] (a.obj)", max - 10, 11).expect_err("past").to_string();
     assert!(e.contains("s.json") && e.contains("meshes[1] (a.obj)") && e.contains("over the limit of 67108864"), "{e}");
     // No overflow for absurd counts.
-    assert!(check_primitive_total(p, "meshes[0]", "a.obj", usize::MAX, usize::MAX).is_err());
+    assert!(check_primitive_total(p, "spheres", usize::MAX, usize::MAX).is_err());
 }
 
 /// A gzip bomb: a small file that decompresses without end. Decompression stops
