@@ -10,29 +10,16 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use common::{root, run};
+
 use glam::Vec3;
 use rtdiff::backends;
 use rtdiff::film::Image;
 use rtdiff::render::{RenderOptions, render};
 use rtdiff::scene::{Overrides, Scene};
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
 fn python() -> Option<PathBuf> {
     common::venv_python("mitsuba_live")
-}
-
-fn run(cmd: &mut Command) -> String {
-    let out = cmd.output().unwrap_or_else(|e| panic!("{cmd:?}: {e}"));
-    assert!(
-        out.status.success(),
-        "{cmd:?} failed:\n{}\n{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
 /// Export `scene` at `size`, render it with Mitsuba and with rtdiff; return both images.
@@ -137,9 +124,7 @@ fn export_names_what_mitsuba_cannot_express() {
 #[test]
 fn bloom_matches_openimageio() {
     let Some(py) = python() else { return };
-    let dir = std::env::temp_dir().join(format!("rtdiff-live-bloom-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::temp_dir("live-bloom");
     let mesh = root().join("scenes/meshes/cornell_box.obj");
     // A bright light so that part of the image crosses the threshold (and part does not).
     let scene = serde_json::json!({

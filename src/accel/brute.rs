@@ -27,10 +27,16 @@ impl Tracer for BruteForce {
     }
 
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        if !ray.is_traceable() {
+            return None;
+        }
         crate::with_triangle_kernel!(self.test, K => closest::<K>(&self.prims, ray))
     }
 
     fn occluded(&self, ray: &Ray) -> bool {
+        if !ray.is_traceable() {
+            return false;
+        }
         crate::with_triangle_kernel!(self.test, K => any::<K>(&self.prims, ray))
     }
 }

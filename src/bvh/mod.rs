@@ -136,6 +136,9 @@ impl BvhTracer {
     /// `counts` (the same traversal code; `()` counts nothing).
     pub fn intersect_with<C: Count>(&self, ray: &Ray, counts: &mut C) -> Option<Hit> {
         counts.ray();
+        if !ray.is_traceable() {
+            return None;
+        }
         match &self.tree {
             Tree::Wide(w, _) => w.intersect_counting(ray, self.cfg.triangle_test, counts),
             Tree::Binary(b) => {
@@ -147,6 +150,9 @@ impl BvhTracer {
     /// [`Tracer::occluded`] reporting the ray and the traversal's work to `counts`.
     pub fn occluded_with<C: Count>(&self, ray: &Ray, counts: &mut C) -> bool {
         counts.ray();
+        if !ray.is_traceable() {
+            return false;
+        }
         match &self.tree {
             Tree::Wide(w, _) => w.occluded_counting(ray, self.cfg.triangle_test, counts),
             Tree::Binary(b) => {
@@ -194,7 +200,12 @@ impl Tracer for BvhTracer {
     #[inline]
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
         match &self.tree {
-            Tree::Wide(w, k) => k.closest(w, ray),
+            Tree::Wide(w, k) => {
+                if !ray.is_traceable() {
+                    return None;
+                }
+                k.closest(w, ray)
+            }
             Tree::Binary(_) => self.intersect_with(ray, &mut ()),
         }
     }
@@ -202,7 +213,7 @@ impl Tracer for BvhTracer {
     #[inline]
     fn occluded(&self, ray: &Ray) -> bool {
         match &self.tree {
-            Tree::Wide(w, k) => k.any(w, ray),
+            Tree::Wide(w, k) => ray.is_traceable() && k.any(w, ray),
             Tree::Binary(_) => self.occluded_with(ray, &mut ()),
         }
     }

@@ -427,7 +427,8 @@ impl Kernels {
     }
 
     /// Closest hits of `rays` into `out` (same length), eight rays at a time
-    /// ([`super::wide_packet`]); the same answers as [`Self::closest`].
+    /// ([`super::wide_packet`]); the same answers as [`Self::closest`], and
+    /// none for a ray that is not [`Ray::is_traceable`].
     pub fn closest_batch(&self, bvh: &WideBvh, rays: &[Ray], out: &mut [Option<Hit>]) {
         assert_eq!(rays.len(), out.len(), "closest_batch: one answer per ray");
         if bvh.nodes.is_empty() {
@@ -435,9 +436,9 @@ impl Kernels {
             return;
         }
         for (r, o) in rays.chunks(super::wide_packet::PACKET).zip(out.chunks_mut(super::wide_packet::PACKET)) {
-            if r.len() < super::wide_packet::MIN_PACKET {
+            if r.len() < super::wide_packet::MIN_PACKET || !r.iter().all(Ray::is_traceable) {
                 for (r, o) in r.iter().zip(o) {
-                    *o = self.closest(bvh, r);
+                    *o = if r.is_traceable() { self.closest(bvh, r) } else { None };
                 }
             } else {
                 // SAFETY: as in `closest`; the tree is not empty and each chunk holds 1 to 8 rays.
@@ -454,9 +455,9 @@ impl Kernels {
             return;
         }
         for (r, o) in rays.chunks(super::wide_packet::PACKET).zip(out.chunks_mut(super::wide_packet::PACKET)) {
-            if r.len() < super::wide_packet::MIN_PACKET {
+            if r.len() < super::wide_packet::MIN_PACKET || !r.iter().all(Ray::is_traceable) {
                 for (r, o) in r.iter().zip(o) {
-                    *o = self.any(bvh, r);
+                    *o = r.is_traceable() && self.any(bvh, r);
                 }
             } else {
                 // SAFETY: as in `closest_batch`.

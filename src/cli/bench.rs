@@ -3,10 +3,10 @@
 
 use std::path::PathBuf;
 
-use crate::backends::{AccelConfig, Builder, Traversal, build_tracer};
+use crate::backends::{Builder, Traversal};
 use crate::error::{Error, Result};
 use crate::limits;
-use crate::perf::bench::{BenchOptions, BenchReport, LIGHT, RaySets};
+use crate::perf::bench::{BenchOptions, BenchReport, LIGHT};
 use crate::perf::race::{MeshRace, RaceOptions};
 use crate::perf::render_race::{RenderRaceOptions, SceneRace};
 
@@ -133,10 +133,8 @@ fn race(args: &BenchArgs, rounds: usize) -> Result<()> {
         let ropts = RaceOptions { rounds, threads: args.threads.clone(), batches: true };
         for s in &files {
             let prims = crate::rays::load_primitives(s, true)?;
-            let reference = build_tracer(prims.clone(), &AccelConfig::default())?;
-            let sets = RaySets::new(&prims, opts.size, opts.incoherent, reference.as_ref());
             eprintln!("racing {} ...", s.display());
-            let m = crate::perf::race::race_mesh(&s.display().to_string(), &prims, &sets.list(), &ropts)?;
+            let m = crate::perf::race::race_bench_sets(&s.display().to_string(), &prims, opts.size, opts.incoherent, &ropts)?;
             print_mesh_race(&m, rounds);
             meshes.push(m);
         }

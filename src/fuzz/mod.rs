@@ -384,7 +384,7 @@ impl Runner {
     fn scene(&self, path: &Path, ov: &Overrides, threads: Option<usize>) -> Result<Outcome> {
         let mut scene = Scene::load_with(path, ov)?;
         crate::scene::validate::check_render_work(&scene)?;
-        let _ = build_tracer(scene.prims.clone(), &scene.accel)?;
+        let tracer = build_tracer(scene.prims.clone(), &scene.accel)?;
         // Render a 3x3 corner of the camera's view when the scene is cheap at that size.
         scene.width = scene.width.min(3);
         scene.height = scene.height.min(3);
@@ -393,12 +393,7 @@ impl Runner {
         if crate::scene::validate::worst_case_rays(&scene) > RENDER_BUDGET {
             return Ok(Outcome::Accepted { ran: false });
         }
-        let tracer = build_tracer(scene.prims.clone(), &scene.accel)?;
-        let opts = crate::render::RenderOptions { threads, quiet: true };
-        let result = crate::render::render(&scene, tracer.as_ref(), &opts)?;
-        if result.plan.bloom {
-            let _ = crate::post::bloom::bloom(&result.image, &scene.params.bloom);
-        }
+        crate::pipeline::render_with(&scene, tracer.as_ref(), &crate::render::RenderOptions { threads, quiet: true })?;
         Ok(Outcome::Accepted { ran: true })
     }
 
@@ -423,7 +418,7 @@ impl Runner {
 
     fn rays(&self, path: &Path) -> Result<Outcome> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, &e))?;
-        let rays = crate::cli::trace::parse_rays(path, &text)?;
+        let rays = crate::rays::file::parse_rays(path, &text)?;
         for r in rays.iter().take(10_000) {
             let _ = self.tracer.intersect(r);
             let _ = self.tracer.occluded(r);

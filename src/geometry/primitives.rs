@@ -24,9 +24,9 @@ impl Triangle {
         (self.v[1] - self.v[0]).cross(self.v[2] - self.v[0])
     }
 
-    /// Twice the area.
+    /// Twice the area (finite for vertices within [`crate::limits::MAX_COORDINATE`]).
     pub fn double_area(&self) -> f32 {
-        self.normal().length()
+        super::scaled_length(self.normal())
     }
 }
 
@@ -67,6 +67,12 @@ impl Primitives {
     pub fn get(&self, i: usize) -> Prim<'_> {
         let nt = self.triangles.len();
         if i < nt { Prim::Triangle(&self.triangles[i]) } else { Prim::Sphere(&self.spheres[i - nt]) }
+    }
+
+    /// The primitive id of sphere `j` (the inverse of [`Primitives::sphere_index`]).
+    #[inline]
+    pub fn sphere_id(&self, j: usize) -> u32 {
+        (self.triangles.len() + j) as u32
     }
 
     /// Sphere index of primitive `i`, `None` for a triangle.

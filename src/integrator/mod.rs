@@ -9,6 +9,7 @@ pub use whitted::Whitted;
 use glam::Vec3;
 
 use crate::accel::Tracer;
+pub use crate::features::IntegratorKind;
 use crate::features::Plan;
 use crate::geometry::{Hit, Ray};
 use crate::rng::Pcg32;
@@ -57,16 +58,6 @@ pub trait Integrator: Send + Sync {
     /// caller has already traced (the renderer traces a row's camera rays as
     /// one batch): the same colour, random numbers and counters.
     fn radiance_with_hit(&self, ray: &Ray, hit: Option<Hit>, rng: &mut Pcg32, counters: &mut Counters) -> Vec3;
-}
-
-/// The integrators a scene can ask for (`params.integrator`); a new variant
-/// goes here, in its own file, and in [`create`], and no caller changes.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum IntegratorKind {
-    /// The reports' recursive tracer ([`Whitted`]).
-    #[default]
-    Whitted,
 }
 
 /// The integrator `scene` asks for, answering rays with `tracer` and doing

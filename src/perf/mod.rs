@@ -11,6 +11,7 @@ pub mod clock;
 pub mod convergence;
 pub mod machine;
 pub mod mitsuba;
+pub mod mitsuba_python;
 pub mod progress;
 pub mod race;
 pub mod render_race;

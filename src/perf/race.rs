@@ -116,6 +116,21 @@ pub struct RaceOptions {
     pub batches: bool,
 }
 
+/// [`race_mesh`] on the benchmark's ray sets of `prims` ([`super::bench::RaySets`]:
+/// `size` x `size` primary rays, `incoherent` incoherent rays, and shadow rays
+/// from the primary hits of the default configuration).
+pub fn race_bench_sets(
+    mesh: &str,
+    prims: &Arc<Primitives>,
+    size: u32,
+    incoherent: usize,
+    opts: &RaceOptions,
+) -> Result<MeshRace> {
+    let reference = crate::backends::build_tracer(prims.clone(), &crate::backends::AccelConfig::default())?;
+    let sets = super::bench::RaySets::new(prims, size, incoherent, reference.as_ref());
+    race_mesh(mesh, prims, &sets.list(), opts)
+}
+
 /// A workload: name, rays, any-hit, batch call.
 pub type Workload<'a> = (String, &'a [Ray], bool, bool);
 
