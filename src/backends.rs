@@ -15,7 +15,7 @@ pub use crate::embree::quality::EmbreeQuality;
 
 use crate::accel::{BruteForce, Tracer};
 use crate::error::Result;
-use crate::geometry::{Primitives, TriangleTest};
+use crate::geometry::{Hit, Primitives, Ray, TriangleTest};
 
 /// Where hits come from.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
@@ -108,14 +108,31 @@ pub fn build_tracer(prims: Arc<Primitives>, cfg: &AccelConfig) -> Result<Box<dyn
     }
 }
 
+/// Build the tracer `cfg` asks for over `prims` and find the closest hit of each of `rays`, in parallel.
+pub fn trace_rays(prims: Arc<Primitives>, cfg: &AccelConfig, rays: &[Ray]) -> Result<Vec<Option<Hit>>> {
+    use rayon::prelude::*;
+    let tracer = build_tracer(prims, cfg)?;
+    Ok(rays.par_iter().map(|r| tracer.intersect(r)).collect())
+}
+
+/// Every BVH builder, in declaration order (median, sah-volume, sah).
+pub fn builders() -> Vec<Builder> {
+    Builder::value_variants().to_vec()
+}
+
+/// Every BVH traversal, in declaration order (basic, priority-queue, sorted-vector, nth-element, fast).
+pub fn traversals() -> Vec<Traversal> {
+    Traversal::value_variants().to_vec()
+}
+
 /// Every native builder x traversal with the watertight test, the default
 /// configuration (`bvh-sah/fast`) first: the variant list of `parity`, `bench`
 /// and the tests.
 pub fn native_variants() -> Vec<AccelConfig> {
     let default = AccelConfig { backend: Backend::Native, ..Default::default() };
     let mut v = vec![default];
-    for &builder in Builder::value_variants() {
-        for &traversal in Traversal::value_variants() {
+    for builder in builders() {
+        for traversal in traversals() {
             let cfg = AccelConfig { backend: Backend::Native, builder, traversal, ..Default::default() };
             if cfg != default {
                 v.push(cfg);

@@ -67,10 +67,16 @@ impl Camera {
         let mut out = Vec::with_capacity(self.width as usize * self.height as usize);
         for y in 0..self.height {
             for x in 0..self.width {
-                out.push(self.ray(x as f32 + 0.5, y as f32 + 0.5));
+                out.push(self.pixel_centre_ray(x, y));
             }
         }
         out
+    }
+
+    /// The pinhole ray through the centre of pixel `(x, y)` (the render's ray at one sample per pixel).
+    #[inline]
+    pub fn pixel_centre_ray(&self, x: u32, y: u32) -> Ray {
+        self.ray(x as f32 + 0.5, y as f32 + 0.5)
     }
 
     /// Unit direction through continuous pixel position `(px, py)`, with

@@ -124,6 +124,17 @@ impl Default for BloomParams {
     }
 }
 
+/// The integrators a scene can ask for (`params.integrator`); a new variant
+/// goes here, in its own file under `integrator/`, and in
+/// [`crate::integrator::create`], and no caller changes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum IntegratorKind {
+    /// The reports' recursive tracer ([`crate::integrator::Whitted`]).
+    #[default]
+    Whitted,
+}
+
 /// Parameters of the features.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -143,7 +154,7 @@ pub struct Params {
     /// How secondary rays leave surfaces.
     pub ray_offset: SpawnOffset,
     /// Which integrator renders the scene (see [`crate::integrator::create`]).
-    pub integrator: crate::integrator::IntegratorKind,
+    pub integrator: IntegratorKind,
 }
 
 impl Default for Params {
@@ -156,7 +167,7 @@ impl Default for Params {
             dof_samples: 16,
             bloom: BloomParams::default(),
             ray_offset: SpawnOffset::Robust,
-            integrator: crate::integrator::IntegratorKind::Whitted,
+            integrator: IntegratorKind::Whitted,
         }
     }
 }

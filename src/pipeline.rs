@@ -8,6 +8,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+use crate::accel::Tracer;
 use crate::backends::build_tracer;
 use crate::error::Result;
 use crate::features::Plan;
@@ -58,7 +59,16 @@ pub fn render_scene(scene: &Scene, opts: &RenderOptions) -> Result<Rendered> {
     let t0 = Instant::now();
     let tracer = build_tracer(scene.prims.clone(), &scene.accel)?;
     let build_ms = t0.elapsed().as_secs_f64() * 1e3;
-    let result = render(scene, tracer.as_ref(), opts)?;
+    let mut out = render_with(scene, tracer.as_ref(), opts)?;
+    out.stats.build_ms = build_ms;
+    Ok(out)
+}
+
+/// Render `scene` to its final image with a `tracer` the caller built (for
+/// callers that use it for more than the render, like `rtdiff debug --draw`);
+/// [`RenderStats::build_ms`] is then 0.
+pub fn render_with(scene: &Scene, tracer: &dyn Tracer, opts: &RenderOptions) -> Result<Rendered> {
+    let result = render(scene, tracer, opts)?;
     let (image, bloom) = if result.plan.bloom {
         let st = bloom::bloom_stages(&result.image, &scene.params.bloom);
         (st.result.clone(), Some(st))
@@ -71,7 +81,7 @@ pub fn render_scene(scene: &Scene, opts: &RenderOptions) -> Result<Rendered> {
         triangles: scene.prims.triangles.len(),
         spheres: scene.prims.spheres.len(),
         tracer: tracer.name(),
-        build_ms,
+        build_ms: 0.0,
         render_ms: result.seconds * 1e3,
         rays,
         mrays_per_s: rays as f64 / result.seconds.max(1e-9) / 1e6,

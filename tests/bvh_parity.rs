@@ -6,12 +6,13 @@ mod common;
 
 use std::sync::Arc;
 
-use common::{all_configs, cornell, load_mesh, parity_rays, spheres};
+use common::{cornell, load_mesh, spheres};
 use rayon::prelude::*;
 use rtdiff::accel::{BruteForce, Tracer};
-use rtdiff::backends::{AccelConfig, Traversal, build_tracer};
+use rtdiff::backends::{AccelConfig, Traversal, build_tracer, native_variants};
 use rtdiff::bvh::BvhTracer;
 use rtdiff::geometry::{Hit, Primitives, TriangleTest};
+use rtdiff::rays::mixed_rays;
 
 const RAYS: usize = 100_000;
 /// Rays for the alternative (Moller-Trumbore) triangle test, which only
@@ -57,7 +58,7 @@ fn check_tracer(label: &str, tracer: &dyn Tracer, rays: &[rtdiff::geometry::Ray]
 
 fn check_scene(label: &str, prims: Primitives, seed: u64) {
     let prims = Arc::new(prims);
-    let all_rays = parity_rays(&prims, RAYS, seed);
+    let all_rays = mixed_rays(&prims, RAYS, seed);
     for test in [TriangleTest::Watertight, TriangleTest::MollerTrumbore] {
         let rays = if test == TriangleTest::Watertight { &all_rays[..] } else { &all_rays[..MT_RAYS] };
         let brute = BruteForce::new(prims.clone(), test);
@@ -67,10 +68,10 @@ fn check_scene(label: &str, prims: Primitives, seed: u64) {
         // almost nothing is hit would make the comparison vacuous.
         assert!(hits > rays.len() / 4, "{label}: only {hits} hits");
         let configs: Vec<AccelConfig> = if test == TriangleTest::Watertight {
-            all_configs()
+            native_variants()
         } else {
             // The alternative triangle test goes through the same leaf code: check it on two paths.
-            all_configs()
+            native_variants()
                 .into_iter()
                 .filter(|c| matches!(c.traversal, Traversal::Basic | Traversal::Fast))
                 .map(|c| AccelConfig { triangle_test: test, ..c })
@@ -122,7 +123,7 @@ fn spheres_and_floor() {
 fn empty_scene_has_no_hits() {
     let prims = Arc::new(Primitives::default());
     let r = rtdiff::geometry::Ray::new(glam::Vec3::ZERO, glam::Vec3::X);
-    for cfg in all_configs() {
+    for cfg in native_variants() {
         let t = build_tracer(prims.clone(), &cfg).unwrap();
         assert!(t.intersect(&r).is_none() && !t.occluded(&r), "{}", t.name());
     }

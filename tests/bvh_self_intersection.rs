@@ -12,31 +12,15 @@ use glam::{DVec3, Vec3};
 use rtdiff::backends::{AccelConfig, Traversal, build_tracer};
 use rtdiff::camera::Camera;
 use rtdiff::geometry::Hit;
+use rtdiff::geometry::aabb::Slab;
 use rtdiff::geometry::offset::SpawnOffset;
 
-/// Does the segment `p -> q` come within `margin` of the box `[lo, hi]`? (f64 slab test on the grown box)
+/// Does the segment `p -> q` come within `margin` of the box `[lo, hi]`? (the slab test in f64 on the grown box)
 fn segment_near_box(p: DVec3, q: DVec3, lo: DVec3, hi: DVec3, margin: f64) -> bool {
-    let (lo, hi) = (lo - DVec3::splat(margin), hi + DVec3::splat(margin));
-    let d = q - p;
-    let (mut t0, mut t1) = (0.0f64, 1.0f64);
-    for a in 0..3 {
-        if d[a] == 0.0 {
-            if p[a] < lo[a] || p[a] > hi[a] {
-                return false;
-            }
-            continue;
-        }
-        let (mut n, mut f) = ((lo[a] - p[a]) / d[a], (hi[a] - p[a]) / d[a]);
-        if n > f {
-            std::mem::swap(&mut n, &mut f);
-        }
-        t0 = t0.max(n);
-        t1 = t1.min(f);
-        if t0 > t1 {
-            return false;
-        }
-    }
-    true
+    let m = DVec3::splat(margin);
+    Slab::from_line(p.to_array(), (q - p).to_array())
+        .clip((lo - m).to_array(), (hi + m).to_array(), 0.0, 1.0, 1.0)
+        .is_some()
 }
 
 /// (points checked, false shadow hits) for one placement and spawn policy.

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use rtdiff::backends;
-use rtdiff::backends::{AccelConfig, Backend, Builder, Traversal};
+use rtdiff::backends::{AccelConfig, Backend};
 use rtdiff::bvh::{BvhTracer, TraversalCounts, VisitLog};
 use rtdiff::debug::{self, Metric, overlay};
 use rtdiff::geometry::TriangleTest;
@@ -32,10 +32,6 @@ fn load(name: &str, size: u32, features: &[(&str, bool)]) -> Scene {
     };
     Scene::load_with(&scene_path(name), &ov).unwrap_or_else(|e| panic!("{e}"))
 }
-
-const ALL_TRAVERSALS: [Traversal; 5] =
-    [Traversal::Basic, Traversal::PriorityQueue, Traversal::SortedVector, Traversal::NthElement, Traversal::Fast];
-const ALL_BUILDERS: [Builder; 3] = [Builder::Median, Builder::SahVolume, Builder::Sah];
 
 /// Every overlay of `rtdiff debug --draw`, each at a pixel that sees the scene.
 fn overlays(pixel: (u32, u32)) -> Vec<Box<dyn overlay::Overlay>> {
@@ -77,14 +73,14 @@ fn drawing_never_changes_the_render_under_it() {
 #[test]
 fn the_green_path_ends_in_the_leaf_holding_the_hit() {
     let scene = load("dragon", 48, &[]);
-    for builder in ALL_BUILDERS {
-        for traversal in ALL_TRAVERSALS {
+    for builder in rtdiff::backends::builders() {
+        for traversal in rtdiff::backends::traversals() {
             let cfg = AccelConfig { builder, traversal, ..Default::default() };
             let bvh = BvhTracer::new(&scene.prims, &cfg);
             let mut hits = 0;
             for y in 0..48 {
                 for x in 0..48 {
-                    let ray = scene.camera.ray(x as f32 + 0.5, y as f32 + 0.5);
+                    let ray = scene.camera.pixel_centre_ray(x, y);
                     let mut log = VisitLog::default();
                     let hit = bvh.intersect_with(&ray, &mut log);
                     assert_eq!(
@@ -141,8 +137,8 @@ fn the_green_path_ends_in_the_leaf_holding_the_hit() {
 fn heatmap_totals_equal_the_traversal_counters_of_the_same_rays() {
     // Shading off: each pixel traces exactly its pinhole camera ray (spp 1).
     let scene = load("dragon", 64, &[("shading", false)]);
-    for builder in ALL_BUILDERS {
-        for traversal in ALL_TRAVERSALS {
+    for builder in rtdiff::backends::builders() {
+        for traversal in rtdiff::backends::traversals() {
             let cfg = AccelConfig { builder, traversal, ..Default::default() };
             let hm = debug::heatmap(&scene, &cfg, &QUIET).unwrap();
             let bvh = BvhTracer::new(&scene.prims, &cfg);
@@ -150,8 +146,8 @@ fn heatmap_totals_equal_the_traversal_counters_of_the_same_rays() {
             for y in 0..64 {
                 for x in 0..64 {
                     let mut c = TraversalCounts::default();
-                    bvh.intersect_with(&scene.camera.ray(x as f32 + 0.5, y as f32 + 0.5), &mut c);
-                    assert_eq!(hm.pixels[y * 64 + x], c, "{builder:?}/{traversal:?} pixel ({x}, {y})");
+                    bvh.intersect_with(&scene.camera.pixel_centre_ray(x, y), &mut c);
+                    assert_eq!(hm.pixels[(y * 64 + x) as usize], c, "{builder:?}/{traversal:?} pixel ({x}, {y})");
                     total.add(&c);
                 }
             }
@@ -167,7 +163,7 @@ fn heatmap_totals_equal_the_traversal_counters_of_the_same_rays() {
     let mut c = TraversalCounts::default();
     for y in 0..64 {
         for x in 0..64 {
-            wide.intersect_counted(&scene.camera.ray(x as f32 + 0.5, y as f32 + 0.5), TriangleTest::Watertight, &mut c);
+            wide.intersect_counted(&scene.camera.pixel_centre_ray(x, y), TriangleTest::Watertight, &mut c);
         }
     }
     assert_eq!(debug::heatmap(&scene, &cfg, &QUIET).unwrap().totals, c);

@@ -149,9 +149,8 @@ fn packet_layouts_and_answers_match_single_rays() {
     assert_eq!((size_of::<ffi::RTCRayHit8>(), align_of::<ffi::RTCRayHit8>()), (672, 32));
     let prims = one_triangle_and_sphere();
     let t = EmbreeTracer::new(prims, EmbreeQuality::Medium).unwrap();
-    let mut rng = rtdiff::rays::Rng::new(5);
     let bounds = rtdiff::geometry::Aabb::new(Vec3::new(-1.0, -1.0, -1.0), Vec3::new(7.0, 2.0, 2.0));
-    let rays: Vec<Ray> = (0..4003).map(|_| Ray::new(rng.in_box(&bounds), rng.unit_vector())).collect();
+    let rays = rtdiff::rays::incoherent_rays(&bounds, 4003, 5);
     let mut hits = 0;
     for chunk in rays.chunks(8) {
         let h8 = t.intersect8(chunk);

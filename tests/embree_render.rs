@@ -16,7 +16,7 @@ fn primary_prims(scene: &Scene, t: &dyn Tracer) -> Vec<Option<u32>> {
     let mut v = Vec::new();
     for y in 0..scene.height {
         for x in 0..scene.width {
-            v.push(t.intersect(&scene.camera.ray(x as f32 + 0.5, y as f32 + 0.5)).map(|h| h.prim));
+            v.push(t.intersect(&scene.camera.pixel_centre_ray(x, y)).map(|h| h.prim));
         }
     }
     v

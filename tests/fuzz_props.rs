@@ -114,7 +114,7 @@ proptest! {
     ) {
         let line = fields.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(",");
         let text = format!("{line}\n{junk}\n");
-        match rtdiff::cli::trace::parse_rays(Path::new("r.csv"), &text) {
+        match rtdiff::rays::file::parse_rays(Path::new("r.csv"), &text) {
             Ok(rays) => {
                 for r in rays {
                     prop_assert!(r.origin.is_finite() && r.dir.is_finite() && r.dir != glam::Vec3::ZERO);

@@ -332,12 +332,12 @@ fn crc32(data: &[u8]) -> u32 {
 #[test]
 fn ray_csv_limits() {
     let p = Path::new("rays.csv");
-    let ok = rtdiff::cli::trace::parse_rays(p, "1e12,0,0,0,0,1,0,inf\n").expect("at the limit");
+    let ok = rtdiff::rays::file::parse_rays(p, "1e12,0,0,0,0,1,0,inf\n").expect("at the limit");
     assert_eq!(ok.len(), 1);
     let e =
-        rtdiff::cli::trace::parse_rays(p, "0,0,0,0,0,1,0,1\n1.1e12,0,0,0,0,1,0,inf\n").expect_err("past").to_string();
+        rtdiff::rays::file::parse_rays(p, "0,0,0,0,0,1,0,1\n1.1e12,0,0,0,0,1,0,inf\n").expect_err("past").to_string();
     assert!(e.contains("rays.csv") && e.contains("line 2") && e.contains("1e12"), "{e}");
-    let e = rtdiff::cli::trace::parse_rays(p, "0,0,0,0,0,1e39,0,1\n").expect_err("inf").to_string();
+    let e = rtdiff::rays::file::parse_rays(p, "0,0,0,0,0,1e39,0,1\n").expect_err("inf").to_string();
     assert!(e.contains("line 1") && e.contains("finite"), "{e}");
 }
 

@@ -14,21 +14,12 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use serde_json::Value;
+use common::{root, run};
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+use serde_json::Value;
 
 fn python() -> Option<PathBuf> {
     common::venv_python("image_crosscheck")
-}
-
-fn run(cmd: &mut Command) -> String {
-    let out = cmd.output().expect("command runs");
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{cmd:?} failed: {err}");
-    String::from_utf8_lossy(&out.stdout).to_string()
 }
 
 fn render(dir: &Path, scene: &str, spp: u32, seed: u32) -> PathBuf {
@@ -52,9 +43,7 @@ fn close(what: &str, rust: f64, other: f64, rel: f64) {
 #[test]
 fn metrics_and_flip_match_openimageio_and_flip_evaluator() {
     let Some(py) = python() else { return };
-    let dir = std::env::temp_dir().join(format!("rtdiff-crosscheck-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::temp_dir("crosscheck");
     let script = root().join("scripts/mitsuba/crosscheck_metrics.py");
     let mi: Value =
         serde_json::from_str(&run(Command::new(&py).arg(&script).arg("--mitsuba-pair").arg(dir.join("mitsuba"))))
@@ -141,9 +130,7 @@ fn metrics_and_flip_match_openimageio_and_flip_evaluator() {
 #[test]
 fn compare_matches_openimageio_on_every_reference_pair() {
     let Some(py) = python() else { return };
-    let dir = std::env::temp_dir().join(format!("rtdiff-crosscheck-refs-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::temp_dir("crosscheck-refs");
     let refs = common::references::manifest();
     let mut pairs = Vec::new();
     for r in &refs {

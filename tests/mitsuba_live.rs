@@ -10,29 +10,16 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use common::{root, run};
+
 use glam::Vec3;
 use rtdiff::backends;
 use rtdiff::film::Image;
 use rtdiff::render::{RenderOptions, render};
 use rtdiff::scene::{Overrides, Scene};
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
 fn python() -> Option<PathBuf> {
     common::venv_python("mitsuba_live")
-}
-
-fn run(cmd: &mut Command) -> String {
-    let out = cmd.output().unwrap_or_else(|e| panic!("{cmd:?}: {e}"));
-    assert!(
-        out.status.success(),
-        "{cmd:?} failed:\n{}\n{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
 /// Export `scene` at `size`, render it with Mitsuba and with rtdiff; return both images.
@@ -139,9 +126,7 @@ fn export_names_what_mitsuba_cannot_express() {
 #[test]
 fn bloom_matches_openimageio() {
     let Some(py) = python() else { return };
-    let dir = std::env::temp_dir().join(format!("rtdiff-live-bloom-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::temp_dir("live-bloom");
     // A sphere lit by a point light: n.l, and so the luminance, falls smoothly from 1.2 to 0
     // across the disc, so a ring of pixels lies within 1% above the threshold and a 1% move
     // of the threshold changes which pixels bloom (checked below: `straddling_pixels`).
@@ -223,8 +208,7 @@ fn export_bad_input_is_a_clear_error() {
 #[test]
 fn references_regenerate_from_the_current_plugin() {
     let Some(py) = python() else { return };
-    let dir = std::env::temp_dir().join(format!("rtdiff-live-refs-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = common::temp_dir("live-refs");
     let out = Command::new(&py)
         .arg(root().join("scripts/mitsuba/make_references.py"))
         .arg("--rtdiff")

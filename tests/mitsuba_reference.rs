@@ -31,9 +31,7 @@ use rtdiff::accel::Tracer;
 use rtdiff::backends;
 use rtdiff::film::Image;
 use rtdiff::geometry::{Hit, Ray};
-use rtdiff::integrator::debug::{RayKind, RayNode, RayTree};
-use rtdiff::integrator::{Counters, Whitted};
-use rtdiff::rng::Pcg32;
+use rtdiff::integrator::debug::RayNode;
 use rtdiff::scene::file::LightSpec;
 use rtdiff::scene::{Scene, SceneFile};
 use rtdiff::verify::image::stats::{Moments, WelchOptions, WelchReport, welch_test};
@@ -94,7 +92,7 @@ fn classify(scene: &Scene, tracer: &dyn Tracer, x: u32, y: u32) -> Class {
         if x < 0 || y < 0 || x >= scene.width as i64 || y >= scene.height as i64 {
             return None;
         }
-        Some(tracer.intersect(&scene.camera.ray(x as f32 + 0.5, y as f32 + 0.5)))
+        Some(tracer.intersect(&scene.camera.pixel_centre_ray(x as u32, y as u32)))
     };
     let centre = hit_at(x as i64, y as i64).unwrap();
     let object = |h: &Option<Hit>| h.map(|h| scene.material_of(h.prim));
@@ -106,15 +104,11 @@ fn classify(scene: &Scene, tracer: &dyn Tracer, x: u32, y: u32) -> Class {
         }
     }
     let Some(h) = centre else { return Class::Unexplained };
-    let integ = Whitted::new(scene, tracer, scene.plan());
-    let mut tree = RayTree::default();
-    let mut rng = Pcg32::for_pixel(scene.seed, x, y);
-    let ray = scene.camera.ray(x as f32 + 0.5, y as f32 + 0.5);
-    integ.trace_as(RayKind::Camera, &ray, 0, &mut rng, &mut Counters::default(), &mut tree);
-    if tree.roots.iter().any(|n| has_terminator(scene, n)) {
+    let tree = rtdiff::debug::trace_pixel_with(scene, tracer, x, y).unwrap().root;
+    if has_terminator(scene, &tree) {
         return Class::ShadowTerminator;
     }
-    if tree.roots.iter().any(|n| has_shadow_edge(scene, n)) {
+    if has_shadow_edge(scene, &tree) {
         return Class::ShadowEdge;
     }
     if (h.prim as usize) < scene.prims.triangles.len() && (1.0 - h.u - h.v).min(h.u).min(h.v) < 1e-4 {

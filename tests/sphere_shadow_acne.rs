@@ -41,7 +41,7 @@ fn black_lit_pixels(radius: f32, shift: Vec3) -> (usize, usize) {
     let (mut lit, mut black) = (0, 0);
     for y in 0..scene.height {
         for x in 0..scene.width {
-            let ray = scene.camera.ray(x as f32 + 0.5, y as f32 + 0.5);
+            let ray = scene.camera.pixel_centre_ray(x, y);
             let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3().normalize());
             let b = (c - o).dot(d);
             let closest = (o + b * d - c).length();

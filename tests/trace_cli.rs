@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use rtdiff::cli::trace::parse_rays;
+use rtdiff::rays::file::parse_rays;
 
 fn tmp(name: &str, text: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("rtdiff-trace-{}", std::process::id()));

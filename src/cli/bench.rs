@@ -3,10 +3,10 @@
 
 use std::path::PathBuf;
 
-use crate::backends::{AccelConfig, Builder, Traversal, build_tracer};
+use crate::backends::{Builder, Traversal};
 use crate::error::{Error, Result};
 use crate::limits;
-use crate::perf::bench::{BenchOptions, BenchReport, LIGHT, RaySets};
+use crate::perf::bench::{BenchOptions, BenchReport, LIGHT};
 use crate::perf::race::RaceReport;
 
 /// Arguments of `rtdiff bench`.
@@ -84,10 +84,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         let prims = crate::rays::load_primitives(s, true)?;
         println!("\n## {} ({} primitives, {} rayon threads)", s.display(), prims.len(), rayon::current_num_threads());
         if let Some(rounds) = args.race {
-            let reference = build_tracer(prims.clone(), &AccelConfig::default())?;
-            let sets = RaySets::new(&prims, opts.size, opts.incoherent, reference.as_ref());
-            let report = crate::perf::race::race(&prims, &sets.list(), rounds)?;
-            print_race(&report);
+            print_race(&crate::perf::race::race_bench_sets(&prims, opts.size, opts.incoherent, rounds)?);
         } else {
             print_bench(&crate::perf::bench::run(&s.display().to_string(), prims, &opts)?);
         }

@@ -34,11 +34,7 @@ pub fn run(args: &BvhStatsArgs) -> Result<()> {
         return Err(Error::Invalid(format!("--bins must be at least 2 (got {})", args.bins)));
     }
     let prims = load_primitives(&args.scene, false)?;
-    let builders = if args.builder.is_empty() {
-        vec![Builder::Median, Builder::SahVolume, Builder::Sah]
-    } else {
-        args.builder.clone()
-    };
+    let builders = if args.builder.is_empty() { crate::backends::builders() } else { args.builder.clone() };
     let stats: Vec<BvhStats> = builders
         .iter()
         .map(|&builder| {

@@ -8,14 +8,11 @@
 use std::fmt::Write;
 use std::path::PathBuf;
 
-use crate::backends::{self, Builder, Traversal};
+use crate::backends::{Builder, Traversal};
 use crate::debug::{self, Metric};
 use crate::error::{Error, Result};
-use crate::integrator::Counters;
-use crate::integrator::Whitted;
-use crate::integrator::debug::{RayKind, RayNode, RayTree};
+use crate::integrator::debug::{RayKind, RayNode};
 use crate::render::RenderOptions;
-use crate::rng::Pcg32;
 use crate::scene::{Overrides, Scene};
 
 /// Arguments of `rtdiff debug`.
@@ -212,17 +209,8 @@ pub fn run(args: &DebugArgs) -> Result<()> {
     let [x, y] = args.pixel[..] else {
         return Err(Error::Invalid("give --pixel X Y (the ray tree), --draw WHAT or --heatmap METRIC".into()));
     };
-    if x >= scene.width || y >= scene.height {
-        return Err(Error::Invalid(format!("pixel ({x}, {y}) is outside the {}x{} image", scene.width, scene.height)));
-    }
-    let tracer = backends::build_tracer(scene.prims.clone(), &scene.accel)?;
-    let integ = Whitted::new(&scene, tracer.as_ref(), scene.plan());
-    let mut tree = RayTree::default();
-    let mut counters = Counters::default();
-    let mut rng = Pcg32::for_pixel(scene.seed, x, y);
-    let ray = scene.camera.ray(x as f32 + 0.5, y as f32 + 0.5);
-    integ.trace_as(RayKind::Camera, &ray, 0, &mut rng, &mut counters, &mut tree);
-    let root = tree.roots.first().ok_or_else(|| Error::Invalid("no ray was traced".into()))?;
+    let debug::PixelTrace { root, counters } = debug::trace_pixel(&scene, x, y)?;
+    let root = &root;
     if args.json {
         let json = serde_json::json!({ "pixel": [x, y], "counters": counters, "ray": root });
         println!("{}", serde_json::to_string_pretty(&json).unwrap_or_default());

@@ -85,7 +85,6 @@ pub fn run(args: &ParityArgs) -> Result<()> {
             parity::native_variants()
         },
     };
-    let start = std::time::Instant::now();
     let report = parity::run(&ctx, &opts)?;
     if args.json {
         let s = serde_json::to_string_pretty(&report)
@@ -93,7 +92,7 @@ pub fn run(args: &ParityArgs) -> Result<()> {
         println!("{s}");
     } else {
         print!("{}", parity::format_report(&report));
-        println!("{} in {:.2} s", args.scene.display(), start.elapsed().as_secs_f64());
+        println!("{} in {:.2} s", args.scene.display(), report.seconds);
     }
     Ok(())
 }

@@ -8,8 +8,8 @@ use crate::backends::{self, AccelConfig};
 use crate::camera::Camera;
 use crate::error::Result;
 use crate::film::Image;
-use crate::post::bloom;
-use crate::render::{RenderOptions, render};
+use crate::pipeline::render_with;
+use crate::render::RenderOptions;
 use crate::scene::Scene;
 
 /// What [`draw`] made.
@@ -63,12 +63,10 @@ pub fn draw(
     if let Some(v) = view {
         scene.camera = v;
     }
-    let result = render(scene, tracer.as_ref(), opts);
+    let result = render_with(scene, tracer.as_ref(), opts);
     let depth = DepthBuffer::trace(&scene.camera, tracer.as_ref());
     let camera = std::mem::replace(&mut scene.camera, original);
-    let result = result?;
-    let render =
-        if result.plan.bloom { bloom::bloom_stages(&result.image, &scene.params.bloom).result } else { result.image };
+    let render = result?.image;
     let mut image = render.clone();
     let mask = draw_lines(&mut image, &depth, &camera, &lines);
     Ok(DrawOutput { render, image, mask, lines, name: overlay.name() })

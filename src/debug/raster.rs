@@ -43,7 +43,7 @@ impl DepthBuffer {
         let mut dist = vec![f32::INFINITY; w as usize * h as usize];
         dist.par_chunks_mut(w as usize).enumerate().for_each(|(y, row)| {
             for (x, d) in row.iter_mut().enumerate() {
-                let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5);
+                let ray = camera.pixel_centre_ray(x as u32, y as u32);
                 if let Some(hit) = tracer.intersect(&ray) {
                     *d = hit.t * ray.dir.length();
                 }

@@ -73,10 +73,26 @@ impl EmbreeTracer {
                 let n: Vec3 = (ray.at(t) - s.center) / s.radius;
                 let u = (n.z.atan2(n.x) / std::f32::consts::TAU).rem_euclid(1.0);
                 let v = n.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI;
-                Some(Hit { t, prim: self.prims.triangles.len() as u32 + prim, u, v })
+                Some(Hit { t, prim: self.prims.sphere_id(prim as usize), u, v })
             }
             _ => None,
         }
+    }
+
+    /// Write `rays` (at most 8) into the lanes of `r8`; the mask marks the
+    /// lanes to trace (rays with `t_min > t_max` stay inactive).
+    fn rtc_ray8(rays: &[Ray], r8: &mut ffi::RTCRay8) -> ffi::Valid8 {
+        let mut valid = ffi::Valid8::default();
+        for (k, r) in rays.iter().enumerate() {
+            if r.t_min > r.t_max {
+                continue;
+            }
+            valid.0[k] = -1;
+            (r8.org_x[k], r8.org_y[k], r8.org_z[k]) = (r.origin.x, r.origin.y, r.origin.z);
+            (r8.dir_x[k], r8.dir_y[k], r8.dir_z[k]) = (r.dir.x, r.dir.y, r.dir.z);
+            (r8.tnear[k], r8.tfar[k], r8.mask[k]) = (r.t_min, r.t_max, u32::MAX);
+        }
+        valid
     }
 
     /// Closest hits of up to 8 rays with one `rtcIntersect8` call (lanes
@@ -84,17 +100,7 @@ impl EmbreeTracer {
     pub fn intersect8(&self, rays: &[Ray]) -> [Option<Hit>; 8] {
         assert!(rays.len() <= 8, "intersect8 takes at most 8 rays");
         let mut rh = ffi::RTCRayHit8::default();
-        let mut valid = ffi::Valid8::default();
-        for (k, r) in rays.iter().enumerate() {
-            if r.t_min > r.t_max {
-                continue;
-            }
-            valid.0[k] = -1;
-            let w = &mut rh.ray;
-            (w.org_x[k], w.org_y[k], w.org_z[k]) = (r.origin.x, r.origin.y, r.origin.z);
-            (w.dir_x[k], w.dir_y[k], w.dir_z[k]) = (r.dir.x, r.dir.y, r.dir.z);
-            (w.tnear[k], w.tfar[k], w.mask[k]) = (r.t_min, r.t_max, u32::MAX);
-        }
+        let valid = Self::rtc_ray8(rays, &mut rh.ray);
         rh.hit.geomID = [ffi::RTC_INVALID_GEOMETRY_ID; 8];
         // SAFETY: committed scene; `valid` and `rh` are 32-byte aligned and
         // laid out as the 4.4 RTCRayHit8 (672 bytes, asserted in ffi.rs);
@@ -114,16 +120,7 @@ impl EmbreeTracer {
     pub fn occluded8(&self, rays: &[Ray]) -> [bool; 8] {
         assert!(rays.len() <= 8, "occluded8 takes at most 8 rays");
         let mut r8 = ffi::RTCRay8::default();
-        let mut valid = ffi::Valid8::default();
-        for (k, r) in rays.iter().enumerate() {
-            if r.t_min > r.t_max {
-                continue;
-            }
-            valid.0[k] = -1;
-            (r8.org_x[k], r8.org_y[k], r8.org_z[k]) = (r.origin.x, r.origin.y, r.origin.z);
-            (r8.dir_x[k], r8.dir_y[k], r8.dir_z[k]) = (r.dir.x, r.dir.y, r.dir.z);
-            (r8.tnear[k], r8.tfar[k], r8.mask[k]) = (r.t_min, r.t_max, u32::MAX);
-        }
+        let valid = Self::rtc_ray8(rays, &mut r8);
         // SAFETY: as in `intersect8`, with the 384-byte RTCRay8.
         unsafe { ffi::rtcOccluded8(&valid, self.scene.raw(), &mut r8, std::ptr::null_mut()) };
         std::array::from_fn(|k| valid.0[k] != 0 && r8.tfar[k] == f32::NEG_INFINITY)

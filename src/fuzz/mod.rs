@@ -393,12 +393,7 @@ impl Runner {
         if crate::scene::validate::worst_case_rays(&scene) > RENDER_BUDGET {
             return Ok(Outcome::Accepted { ran: false });
         }
-        let tracer = build_tracer(scene.prims.clone(), &scene.accel)?;
-        let opts = crate::render::RenderOptions { threads, quiet: true };
-        let result = crate::render::render(&scene, tracer.as_ref(), &opts)?;
-        if result.plan.bloom {
-            let _ = crate::post::bloom::bloom(&result.image, &scene.params.bloom);
-        }
+        crate::pipeline::render_scene(&scene, &crate::render::RenderOptions { threads, quiet: true })?;
         Ok(Outcome::Accepted { ran: true })
     }
 
@@ -423,7 +418,7 @@ impl Runner {
 
     fn rays(&self, path: &Path) -> Result<Outcome> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, &e))?;
-        let rays = crate::cli::trace::parse_rays(path, &text)?;
+        let rays = crate::rays::file::parse_rays(path, &text)?;
         for r in rays.iter().take(10_000) {
             let _ = self.tracer.intersect(r);
             let _ = self.tracer.occluded(r);

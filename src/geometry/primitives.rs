@@ -69,6 +69,12 @@ impl Primitives {
         if i < nt { Prim::Triangle(&self.triangles[i]) } else { Prim::Sphere(&self.spheres[i - nt]) }
     }
 
+    /// The primitive id of sphere `j` (the inverse of [`Primitives::sphere_index`]).
+    #[inline]
+    pub fn sphere_id(&self, j: usize) -> u32 {
+        (self.triangles.len() + j) as u32
+    }
+
     /// Sphere index of primitive `i`, `None` for a triangle.
     #[inline]
     pub fn sphere_index(&self, i: usize) -> Option<usize> {

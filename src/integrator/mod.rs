@@ -9,6 +9,7 @@ pub use whitted::Whitted;
 use glam::Vec3;
 
 use crate::accel::Tracer;
+pub use crate::features::IntegratorKind;
 use crate::features::Plan;
 use crate::geometry::Ray;
 use crate::rng::Pcg32;
@@ -50,16 +51,6 @@ impl Counters {
 pub trait Integrator: Send + Sync {
     /// Colour arriving at the ray origin along `ray` (a camera ray: depth 0).
     fn radiance(&self, ray: &Ray, rng: &mut Pcg32, counters: &mut Counters) -> Vec3;
-}
-
-/// The integrators a scene can ask for (`params.integrator`); a new variant
-/// goes here, in its own file, and in [`create`], and no caller changes.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum IntegratorKind {
-    /// The reports' recursive tracer ([`Whitted`]).
-    #[default]
-    Whitted,
 }
 
 /// The integrator `scene` asks for, answering rays with `tracer` and doing

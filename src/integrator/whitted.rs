@@ -41,6 +41,14 @@ pub struct Interaction {
     pub material: u32,
 }
 
+/// What one camera sample carries down its ray tree: its random numbers, the
+/// render's counters and the recorder of `rtdiff debug`.
+struct Path<'p, R> {
+    rng: &'p mut Pcg32,
+    c: &'p mut Counters,
+    rec: &'p mut R,
+}
+
 /// The recursive tracer of the reports, in either shading model.
 pub struct Whitted<'a> {
     scene: &'a Scene,
@@ -130,18 +138,8 @@ impl<'a> Whitted<'a> {
         0.0
     }
 
-    /// Light reflected at `it` towards `wo` from every light.
-    #[allow(clippy::too_many_arguments)]
-    fn direct<R: Recorder>(
-        &self,
-        it: &Interaction,
-        m: &Material,
-        kd: Vec3,
-        wo: Vec3,
-        rng: &mut Pcg32,
-        c: &mut Counters,
-        rec: &mut R,
-    ) -> Vec3 {
+    /// Light reflected at `it` towards `wo` from every light, `kd` being the diffuse colour there.
+    fn direct<R: Recorder>(&self, it: &Interaction, m: &Material, kd: Vec3, wo: Vec3, path: &mut Path<R>) -> Vec3 {
         let sp = SurfacePoint { p: it.si.p, n: it.ns, wo, kd, ks: m.ks, shininess: m.shininess };
         let shading = model(m.model);
         let mut sum = Vec3::ZERO;
@@ -152,12 +150,13 @@ impl<'a> Whitted<'a> {
             }
             let shadows = if point { self.plan.hard_shadows } else { self.plan.soft_shadows };
             let (n, sampling) = (self.scene.params.light_samples, self.scene.params.light_sampling);
+            let Path { rng, c, rec } = path;
             // Shade each sample as the light produces it (no list, no allocation).
             light.sample(n, sampling, rng, &mut |s: LightSample| {
                 c.light_samples += 1;
                 let f = shading.direct(&sp, &s);
                 if f != Vec3::ZERO {
-                    let vis = if shadows { self.visibility(it, s.position, c, rec) } else { 1.0 };
+                    let vis = if shadows { self.visibility(it, s.position, c, *rec) } else { 1.0 };
                     sum += vis * f;
                     rec.light_sample(li, &s, f, vis);
                 } else {
@@ -169,21 +168,11 @@ impl<'a> Whitted<'a> {
     }
 
     /// Mirror or glossy reflection at `it` of the incoming direction `d`.
-    #[allow(clippy::too_many_arguments)]
-    fn reflection<R: Recorder>(
-        &self,
-        it: &Interaction,
-        m: &Material,
-        d: Vec3,
-        depth: u32,
-        rng: &mut Pcg32,
-        c: &mut Counters,
-        rec: &mut R,
-    ) -> Vec3 {
+    fn reflection<R: Recorder>(&self, it: &Interaction, m: &Material, d: Vec3, depth: u32, path: &mut Path<R>) -> Vec3 {
         let r = (d - 2.0 * d.dot(it.ns) * it.ns).normalize();
         if !self.plan.glossy {
-            c.secondary_rays += 1;
-            return self.trace_as(RayKind::Reflection, &self.spawn(it, r, f32::INFINITY), depth + 1, rng, c, rec);
+            path.c.secondary_rays += 1;
+            return self.trace_path(RayKind::Reflection, &self.spawn(it, r, f32::INFINITY), depth + 1, path);
         }
         // The reports' glossy reflection: perturb r inside a square of side
         // 1 / shininess perpendicular to it and average N rays.
@@ -196,14 +185,14 @@ impl<'a> Whitted<'a> {
         let n = if depth == 0 { self.scene.params.glossy_samples } else { 1 };
         let mut sum = Vec3::ZERO;
         for _ in 0..n {
-            let du = (rng.next_f32() - 0.5) * a;
-            let dw = (rng.next_f32() - 0.5) * a;
+            let du = (path.rng.next_f32() - 0.5) * a;
+            let dw = (path.rng.next_f32() - 0.5) * a;
             let g = (r + du * u + dw * w).normalize();
             if g.dot(it.si.ng) <= 0.0 {
                 continue; // would enter the surface: no light arrives from there
             }
-            c.secondary_rays += 1;
-            sum += self.trace_as(RayKind::Glossy, &self.spawn(it, g, f32::INFINITY), depth + 1, rng, c, rec);
+            path.c.secondary_rays += 1;
+            sum += self.trace_path(RayKind::Glossy, &self.spawn(it, g, f32::INFINITY), depth + 1, path);
         }
         sum / n as f32
     }
@@ -223,27 +212,31 @@ impl<'a> Whitted<'a> {
         c: &mut Counters,
         rec: &mut R,
     ) -> Vec3 {
-        rec.begin(kind, ray, depth);
+        self.trace_path(kind, ray, depth, &mut Path { rng, c, rec })
+    }
+
+    /// Radiance along `ray` (a ray of kind `kind` at recursion depth `depth`) for the sample `path`.
+    fn trace_path<R: Recorder>(&self, kind: RayKind, ray: &Ray, depth: u32, path: &mut Path<R>) -> Vec3 {
+        path.rec.begin(kind, ray, depth);
         let Some(hit) = self.tracer.intersect(ray) else {
-            rec.end(None, self.scene.background);
+            path.rec.end(None, self.scene.background);
             return self.scene.background;
         };
         let it = self.interaction(ray, &hit);
         let m = &self.scene.materials[it.material as usize];
-        let kd = self.diffuse(m, &it, c);
+        let kd = self.diffuse(m, &it, path.c);
         let d = ray.dir.normalize();
-        let mut color = if self.plan.shading { self.direct(&it, m, kd, -d, rng, c, rec) } else { kd };
+        let mut color = if self.plan.shading { self.direct(&it, m, kd, -d, path) } else { kd };
         let deeper = depth < self.scene.params.max_depth;
         if self.plan.reflections && deeper && m.is_reflective() {
-            color += m.ks * self.reflection(&it, m, d, depth, rng, c, rec);
+            color += m.ks * self.reflection(&it, m, d, depth, path);
         }
         if self.plan.transparency && deeper && m.is_transparent() {
-            c.secondary_rays += 1;
-            let behind =
-                self.trace_as(RayKind::Transmission, &self.spawn(&it, d, f32::INFINITY), depth + 1, rng, c, rec);
+            path.c.secondary_rays += 1;
+            let behind = self.trace_path(RayKind::Transmission, &self.spawn(&it, d, f32::INFINITY), depth + 1, path);
             color = m.opacity * color + (1.0 - m.opacity) * behind;
         }
-        rec.end(Some((&hit, &it)), color);
+        path.rec.end(Some((&hit, &it)), color);
         color
     }
 }

@@ -15,7 +15,7 @@ use glam::{Vec2, Vec3};
 use crate::error::{Error, Result};
 
 /// What a caller needs from a mesh file.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Content {
     /// Triangles only: material libraries are not opened at all (`parity`, `trace`, `bench`, `bvh-stats`).
     Geometry,

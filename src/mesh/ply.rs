@@ -178,7 +178,8 @@ pub(crate) fn load(path: &Path, bytes: &[u8], content: Content) -> Result<Mesh> 
             _ => Parser::<Skip>::new().read_payload_for_element(&mut cursor, def, &header).map(drop),
         };
         if let Err(e) = read {
-            return Err(payload_error(path, bytes, header_len, header_lines, &header, name, def, &e));
+            let payload = Payload { bytes, header_len, header_lines };
+            return Err(payload_error(path, &header, &payload, name, def, &e));
         }
         row_line += def.count;
     }
@@ -264,22 +265,30 @@ fn rows_before(header: &Header, name: &str) -> usize {
     header.elements.iter().take_while(|(n, _)| n.as_str() != name).map(|(_, d)| d.count).sum()
 }
 
-#[allow(clippy::too_many_arguments)]
+/// Where a PLY file's payload starts: for errors that name the line of a row.
+struct Payload<'a> {
+    /// The file's bytes (after any header fix).
+    bytes: &'a [u8],
+    /// Length of the header in bytes.
+    header_len: usize,
+    /// Lines in the header.
+    header_lines: usize,
+}
+
+/// The error for element `name` (defined by `def`) whose rows `ply-rs-bw` could not read (`e`).
 fn payload_error(
     path: &Path,
-    bytes: &[u8],
-    header_len: usize,
-    header_lines: usize,
     header: &Header,
+    payload: &Payload,
     name: &str,
     def: &ElementDef,
     e: &std::io::Error,
 ) -> Error {
     match header.encoding {
         Encoding::Ascii => {
-            let text = String::from_utf8_lossy(&bytes[header_len..]);
+            let text = String::from_utf8_lossy(&payload.bytes[payload.header_len..]);
             match locate_ascii(&text, header) {
-                Some((row, msg)) => Error::at(path, header_lines + 1 + row, msg),
+                Some((row, msg)) => Error::at(path, payload.header_lines + 1 + row, msg),
                 None => Error::file(path, format!("element '{name}' ({} rows): {}", def.count, one_line(e))),
             }
         }

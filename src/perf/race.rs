@@ -75,6 +75,15 @@ pub struct RaceReport {
     pub hit_count_differences: Vec<(String, usize, usize)>,
 }
 
+/// [`race`] on the benchmark's ray sets of `prims` ([`super::bench::RaySets`]:
+/// `size` x `size` primary rays, `incoherent` incoherent rays, and shadow rays
+/// from the primary hits of the default configuration).
+pub fn race_bench_sets(prims: &Arc<Primitives>, size: u32, incoherent: usize, rounds: usize) -> Result<RaceReport> {
+    let reference = crate::backends::build_tracer(prims.clone(), &crate::backends::AccelConfig::default())?;
+    let sets = super::bench::RaySets::new(prims, size, incoherent, reference.as_ref());
+    race(prims, &sets.list(), rounds)
+}
+
 /// Run `rounds` interleaved rounds on `prims` with the given ray sets.
 #[cfg(feature = "embree")]
 pub fn race(prims: &Arc<Primitives>, sets: &[(&'static str, &[Ray], bool)], rounds: usize) -> Result<RaceReport> {

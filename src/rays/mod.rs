@@ -3,18 +3,21 @@
 //! break a tracer), the context they are generated from (primitives, camera,
 //! lights), and the loaders that turn a scene file or a mesh into that context.
 
+pub mod aimed;
 pub mod context;
+pub mod file;
 pub mod near_grazing;
 pub mod rng;
 pub mod sets;
 pub mod topology;
 pub mod workload;
 
+pub use aimed::front_facing_rays;
 pub use context::{CameraFn, DEFAULT_IMAGE, DEFAULT_LIGHT, LightFn, RayContext};
 pub use rng::Rng;
 pub use sets::{RaySet, RayTag, SetKind, generate, scene_scale};
 pub use topology::Topology;
-pub use workload::{incoherent_rays, shadow_rays};
+pub use workload::{incoherent_rays, mixed_rays, shadow_rays};
 
 use std::path::Path;
 use std::sync::Arc;

@@ -2,7 +2,7 @@
 
 use glam::Vec3;
 
-use crate::geometry::Aabb;
+use crate::geometry::{Aabb, Prim, Primitives, Triangle};
 
 /// The harness's random numbers: the project's PCG32 ([`crate::rng::Pcg32`],
 /// one stream per ray set) with the few extra draws ray generation needs.
@@ -35,6 +35,11 @@ impl Rng {
         (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
     }
 
+    /// Uniform in `[lo, hi)`.
+    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        self.0.range(lo, hi)
+    }
+
     /// Uniform integer in `0..n` (`0 < n < 2^32`).
     pub fn below(&mut self, n: usize) -> usize {
         self.0.below(n as u32) as usize
@@ -52,5 +57,22 @@ impl Rng {
     pub fn in_box(&mut self, b: &Aabb) -> Vec3 {
         let e = b.extent();
         b.min + Vec3::new(self.f32() * e.x, self.f32() * e.y, self.f32() * e.z)
+    }
+
+    /// Uniform point on triangle `t` (barycentrics folded into the triangle).
+    pub fn point_on_triangle(&mut self, t: &Triangle) -> Vec3 {
+        let (mut b1, mut b2) = (self.f32(), self.f32());
+        if b1 + b2 > 1.0 {
+            (b1, b2) = (1.0 - b1, 1.0 - b2);
+        }
+        (1.0 - b1 - b2) * t.v[0] + b1 * t.v[1] + b2 * t.v[2]
+    }
+
+    /// Uniform point on primitive `i` of `prims` (on a sphere's surface).
+    pub fn point_on(&mut self, prims: &Primitives, i: usize) -> Vec3 {
+        match prims.get(i) {
+            Prim::Triangle(t) => self.point_on_triangle(t),
+            Prim::Sphere(s) => s.center + s.radius * self.unit_vector(),
+        }
     }
 }

@@ -337,11 +337,7 @@ fn generate_one(ctx: &RayContext, kind: SetKind, name: String, seed: u64, count:
                     let angle = 10f32.powf(-1.0 - 6.0 * rng.f32());
                     let sign = if rng.f32() < 0.5 { 1.0 } else { -1.0 };
                     let d = (tangent * angle.cos() + sign * nrm * angle.sin()).normalize();
-                    let (mut b1, mut b2) = (rng.f32(), rng.f32());
-                    if b1 + b2 > 1.0 {
-                        (b1, b2) = (1.0 - b1, 1.0 - b2);
-                    }
-                    let p = (1.0 - b1 - b2) * tri.v[0] + b1 * tri.v[1] + b2 * tri.v[2];
+                    let p = rng.point_on_triangle(&tri);
                     let dist = radius * (0.1 + rng.f32());
                     rays.push(Ray::new(p - dist * d, d));
                     tags.push(RayTag::Plain);

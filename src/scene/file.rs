@@ -6,9 +6,11 @@ use std::collections::BTreeMap;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use crate::backends::{Backend, Builder, EmbreeQuality, Traversal};
+use crate::backends::{AccelConfig, Backend, Builder, EmbreeQuality, Traversal};
+use crate::camera::Camera;
 use crate::features::{Features, Params};
 use crate::geometry::TriangleTest;
+use crate::light::{Light, ParallelogramLight, PointLight, SegmentLight};
 use crate::shading::ShadingModelKind;
 
 /// A whole scene file.
@@ -71,6 +73,18 @@ impl Default for CameraSpec {
     }
 }
 
+impl CameraSpec {
+    /// The camera these parameters describe, sized to `width` x `height` pixels.
+    pub fn camera(&self, width: u32, height: u32) -> Camera {
+        let mut camera = Camera::look_at(self.position, self.look_at, self.up, self.fov, width, height);
+        camera.aperture_radius = self.aperture;
+        if let Some(d) = self.focus_distance {
+            camera.focus_distance = d;
+        }
+        camera
+    }
+}
+
 /// Output image parameters.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -111,6 +125,24 @@ pub struct AccelSpec {
     pub bins: Option<usize>,
     /// Embree build quality.
     pub embree_quality: Option<EmbreeQuality>,
+}
+
+impl AccelSpec {
+    /// The configuration to build: fields left out follow the feature
+    /// switches (`bvh` off: brute force; `sah` off: the median builder) and
+    /// [`AccelConfig::default`].
+    pub fn resolve(&self, features: &Features) -> AccelConfig {
+        let d = AccelConfig::default();
+        AccelConfig {
+            backend: self.backend.unwrap_or(if features.bvh { Backend::Native } else { Backend::Brute }),
+            builder: self.builder.unwrap_or(if features.sah { Builder::Sah } else { Builder::Median }),
+            traversal: self.traversal.unwrap_or(d.traversal),
+            triangle_test: self.triangle_test.unwrap_or(d.triangle_test),
+            leaf_size: self.leaf_size.unwrap_or(d.leaf_size).max(1),
+            bins: self.bins.unwrap_or(d.bins).max(2),
+            embree_quality: self.embree_quality.unwrap_or(d.embree_quality),
+        }
+    }
 }
 
 /// A material.
@@ -210,4 +242,19 @@ pub enum LightSpec {
         /// Colours at v0, v0+edge01, v0+edge02, v0+edge01+edge02.
         colors: [Vec3; 4],
     },
+}
+
+impl LightSpec {
+    /// The light this entry describes.
+    pub fn light(&self) -> Box<dyn Light> {
+        match *self {
+            LightSpec::Point { position, color } => Box::new(PointLight { position, color }),
+            LightSpec::Segment { endpoints, colors } => {
+                Box::new(SegmentLight { p0: endpoints[0], p1: endpoints[1], c0: colors[0], c1: colors[1] })
+            }
+            LightSpec::Parallelogram { v0, edge01, edge02, colors } => {
+                Box::new(ParallelogramLight { v0, edge01, edge02, colors })
+            }
+        }
+    }
 }

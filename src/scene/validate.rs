@@ -18,8 +18,9 @@ use std::path::Path;
 use glam::Vec3;
 use serde_json::Value;
 
-use super::file::{LightSpec, SceneFile};
+use super::file::{AccelSpec, CameraSpec, ImageSpec, LightSpec, MaterialSpec, MeshSpec, SceneFile};
 use crate::error::{Error, Result};
+use crate::features::Params;
 use crate::geometry::offset::SpawnOffset;
 use crate::limits::{self, MAX_COLOR, MAX_COORDINATE};
 
@@ -177,129 +178,167 @@ impl Checker<'_> {
 }
 
 /// Check every number, count and file name of a parsed scene file (after the
-/// command-line overrides) against its range and limit; errors name `path`
-/// and the field.
+/// command-line overrides) against its range and limit, and the geometry that
+/// would make the camera or a light degenerate; errors name `path` and the field.
 pub fn check_file(file: &SceneFile, path: &Path) -> Result<()> {
     let c = Checker { path };
-    let img = &file.image;
-    if img.width == 0 || img.height == 0 {
-        return Err(c.err(
-            "image",
-            format!("image size {}x{} is empty: width and height must be at least 1", img.width, img.height),
-        ));
-    }
-    c.count("image.width", img.width, 1, limits::MAX_IMAGE_SIDE)?;
-    c.count("image.height", img.height, 1, limits::MAX_IMAGE_SIDE)?;
-    let pixels = img.width as u64 * img.height as u64;
-    if pixels > limits::MAX_IMAGE_PIXELS {
-        return Err(c.err(
-            "image",
-            format!(
-                "{}x{} is {pixels} pixels, over the limit of {} pixels",
-                img.width,
-                img.height,
-                limits::MAX_IMAGE_PIXELS
-            ),
-        ));
-    }
-    c.count("image.spp", img.spp, 1, limits::MAX_SPP)?;
-    c.color("image.background", img.background)?;
-
-    let cam = &file.camera;
-    c.point("camera.position", cam.position)?;
-    c.point("camera.look_at", cam.look_at)?;
-    c.point("camera.up", cam.up)?;
-    if cam.up == Vec3::ZERO {
-        return Err(c.err("camera.up", "must not be the zero vector".into()));
-    }
-    if !(cam.fov > 0.0 && cam.fov < 180.0) {
-        return Err(c.err("camera.fov", format!("must be in (0, 180) degrees, got {}", cam.fov)));
-    }
-    c.number("camera.aperture", cam.aperture, 0.0, MAX_COORDINATE)?;
-    if let Some(d) = cam.focus_distance {
-        c.number("camera.focus_distance", d, f32::MIN_POSITIVE, MAX_COORDINATE)?;
-    }
-
-    let p = &file.params;
-    c.count("params.max_depth", p.max_depth, 0, limits::MAX_DEPTH)?;
-    c.count("params.light_samples", p.light_samples, 1, limits::MAX_FEATURE_SAMPLES)?;
-    c.count("params.glossy_samples", p.glossy_samples, 1, limits::MAX_FEATURE_SAMPLES)?;
-    c.count("params.dof_samples", p.dof_samples, 1, limits::MAX_FEATURE_SAMPLES)?;
-    c.number("params.bloom.threshold", p.bloom.threshold, -MAX_COLOR, MAX_COLOR)?;
-    c.number("params.bloom.kernel_size", p.bloom.kernel_size, 1.0, limits::MAX_BLOOM_KERNEL)?;
-    c.number("params.bloom.scale", p.bloom.scale, -MAX_COLOR, MAX_COLOR)?;
-    if let SpawnOffset::Fixed { epsilon } = p.ray_offset {
-        c.number("params.ray_offset.epsilon", epsilon, 0.0, MAX_COORDINATE)?;
-    }
-
-    let a = &file.accel;
-    if let Some(n) = a.leaf_size {
-        c.count("accel.leaf_size", n, 1, limits::MAX_LEAF_SIZE)?;
-    }
-    if let Some(n) = a.bins {
-        c.count("accel.bins", n, limits::MIN_BINS, limits::MAX_BINS)?;
-    }
-
+    c.image(&file.image)?;
+    c.camera(&file.camera)?;
+    c.params(&file.params)?;
+    c.accel(&file.accel)?;
     let items = limits::MAX_SCENE_ITEMS;
     c.count("materials (count)", file.materials.len(), 0, items)?;
     c.count("meshes (count)", file.meshes.len(), 0, items)?;
     c.count("spheres (count)", file.spheres.len(), 0, items)?;
     c.count("lights (count)", file.lights.len(), 0, items)?;
     for (name, m) in &file.materials {
-        let f = |x: &str| format!("materials.{name}.{x}");
-        if let Some(kd) = m.kd {
-            c.color(&f("kd"), kd)?;
-        }
-        if let Some(ks) = m.ks {
-            c.color(&f("ks"), ks)?;
-        }
-        if let Some(s) = m.shininess {
-            c.number(&f("shininess"), s, 0.0, limits::MAX_SHININESS)?;
-        }
-        if let Some(t) = m.transparency {
-            c.number(&f("transparency"), t, 0.0, 1.0)?;
-        }
-        if let Some(t) = &m.kd_texture {
-            c.file_name(&f("kd_texture"), t)?;
-        }
+        c.material(name, m)?;
     }
     for (i, m) in file.meshes.iter().enumerate() {
-        c.file_name(&format!("meshes[{i}].file"), &m.file)?;
-        if let Some(t) = &m.transform {
-            c.vec3(&format!("meshes[{i}].transform.scale"), t.scale, -MAX_COORDINATE, MAX_COORDINATE)?;
-            let r = limits::MAX_ROTATION_DEGREES;
-            c.vec3(&format!("meshes[{i}].transform.rotate"), t.rotate, -r, r)?;
-            c.point(&format!("meshes[{i}].transform.translate"), t.translate)?;
-        }
+        c.mesh(i, m)?;
     }
     for (i, s) in file.spheres.iter().enumerate() {
         c.point(&format!("spheres[{i}].center"), s.center)?;
         c.number(&format!("spheres[{i}].radius"), s.radius, f32::MIN_POSITIVE, MAX_COORDINATE)?;
     }
     for (i, l) in file.lights.iter().enumerate() {
+        c.light(i, l)?;
+    }
+    Ok(())
+}
+
+/// The checks of each part of a scene file.
+impl Checker<'_> {
+    fn image(&self, img: &ImageSpec) -> Result<()> {
+        if img.width == 0 || img.height == 0 {
+            return Err(self.err(
+                "image",
+                format!("image size {}x{} is empty: width and height must be at least 1", img.width, img.height),
+            ));
+        }
+        self.count("image.width", img.width, 1, limits::MAX_IMAGE_SIDE)?;
+        self.count("image.height", img.height, 1, limits::MAX_IMAGE_SIDE)?;
+        let pixels = img.width as u64 * img.height as u64;
+        if pixels > limits::MAX_IMAGE_PIXELS {
+            return Err(self.err(
+                "image",
+                format!(
+                    "{}x{} is {pixels} pixels, over the limit of {} pixels",
+                    img.width,
+                    img.height,
+                    limits::MAX_IMAGE_PIXELS
+                ),
+            ));
+        }
+        self.count("image.spp", img.spp, 1, limits::MAX_SPP)?;
+        self.color("image.background", img.background)
+    }
+
+    fn camera(&self, cam: &CameraSpec) -> Result<()> {
+        self.point("camera.position", cam.position)?;
+        self.point("camera.look_at", cam.look_at)?;
+        self.point("camera.up", cam.up)?;
+        if cam.up == Vec3::ZERO {
+            return Err(self.err("camera.up", "must not be the zero vector".into()));
+        }
+        if !(cam.fov > 0.0 && cam.fov < 180.0) {
+            return Err(self.err("camera.fov", format!("must be in (0, 180) degrees, got {}", cam.fov)));
+        }
+        let view = cam.look_at - cam.position;
+        if view.length_squared() == 0.0 || view.normalize().cross(cam.up).length_squared() == 0.0 {
+            return Err(self.err("camera", "look_at must differ from position and not lie along up".into()));
+        }
+        self.number("camera.aperture", cam.aperture, 0.0, MAX_COORDINATE)?;
+        if let Some(d) = cam.focus_distance {
+            self.number("camera.focus_distance", d, f32::MIN_POSITIVE, MAX_COORDINATE)?;
+        }
+        Ok(())
+    }
+
+    fn params(&self, p: &Params) -> Result<()> {
+        self.count("params.max_depth", p.max_depth, 0, limits::MAX_DEPTH)?;
+        self.count("params.light_samples", p.light_samples, 1, limits::MAX_FEATURE_SAMPLES)?;
+        self.count("params.glossy_samples", p.glossy_samples, 1, limits::MAX_FEATURE_SAMPLES)?;
+        self.count("params.dof_samples", p.dof_samples, 1, limits::MAX_FEATURE_SAMPLES)?;
+        self.number("params.bloom.threshold", p.bloom.threshold, -MAX_COLOR, MAX_COLOR)?;
+        self.number("params.bloom.kernel_size", p.bloom.kernel_size, 1.0, limits::MAX_BLOOM_KERNEL)?;
+        self.number("params.bloom.scale", p.bloom.scale, -MAX_COLOR, MAX_COLOR)?;
+        if let SpawnOffset::Fixed { epsilon } = p.ray_offset {
+            self.number("params.ray_offset.epsilon", epsilon, 0.0, MAX_COORDINATE)?;
+        }
+        Ok(())
+    }
+
+    fn accel(&self, a: &AccelSpec) -> Result<()> {
+        if let Some(n) = a.leaf_size {
+            self.count("accel.leaf_size", n, 1, limits::MAX_LEAF_SIZE)?;
+        }
+        if let Some(n) = a.bins {
+            self.count("accel.bins", n, limits::MIN_BINS, limits::MAX_BINS)?;
+        }
+        Ok(())
+    }
+
+    fn material(&self, name: &str, m: &MaterialSpec) -> Result<()> {
+        let f = |x: &str| format!("materials.{name}.{x}");
+        if let Some(kd) = m.kd {
+            self.color(&f("kd"), kd)?;
+        }
+        if let Some(ks) = m.ks {
+            self.color(&f("ks"), ks)?;
+        }
+        if let Some(s) = m.shininess {
+            self.number(&f("shininess"), s, 0.0, limits::MAX_SHININESS)?;
+        }
+        if let Some(t) = m.transparency {
+            self.number(&f("transparency"), t, 0.0, 1.0)?;
+        }
+        if let Some(t) = &m.kd_texture {
+            self.file_name(&f("kd_texture"), t)?;
+        }
+        Ok(())
+    }
+
+    fn mesh(&self, i: usize, m: &MeshSpec) -> Result<()> {
+        self.file_name(&format!("meshes[{i}].file"), &m.file)?;
+        if let Some(t) = &m.transform {
+            self.vec3(&format!("meshes[{i}].transform.scale"), t.scale, -MAX_COORDINATE, MAX_COORDINATE)?;
+            let r = limits::MAX_ROTATION_DEGREES;
+            self.vec3(&format!("meshes[{i}].transform.rotate"), t.rotate, -r, r)?;
+            self.point(&format!("meshes[{i}].transform.translate"), t.translate)?;
+        }
+        Ok(())
+    }
+
+    fn light(&self, i: usize, l: &LightSpec) -> Result<()> {
         let f = |x: &str| format!("lights[{i}].{x}");
         match l {
             LightSpec::Point { position, color } => {
-                c.point(&f("position"), *position)?;
-                c.color(&f("color"), *color)?;
+                self.point(&f("position"), *position)?;
+                self.color(&f("color"), *color)?;
             }
             LightSpec::Segment { endpoints, colors } => {
                 for k in 0..2 {
-                    c.point(&f(&format!("endpoints[{k}]")), endpoints[k])?;
-                    c.color(&f(&format!("colors[{k}]")), colors[k])?;
+                    self.point(&f(&format!("endpoints[{k}]")), endpoints[k])?;
+                    self.color(&f(&format!("colors[{k}]")), colors[k])?;
                 }
             }
             LightSpec::Parallelogram { v0, edge01, edge02, colors } => {
-                c.point(&f("v0"), *v0)?;
-                c.point(&f("edge01"), *edge01)?;
-                c.point(&f("edge02"), *edge02)?;
+                self.point(&f("v0"), *v0)?;
+                self.point(&f("edge01"), *edge01)?;
+                self.point(&f("edge02"), *edge02)?;
                 for (k, col) in colors.iter().enumerate() {
-                    c.color(&f(&format!("colors[{k}]")), *col)?;
+                    self.color(&f(&format!("colors[{k}]")), *col)?;
+                }
+                if edge01.cross(*edge02).length_squared() == 0.0 {
+                    return Err(
+                        self.err(&format!("lights[{i}]"), "parallelogram edges are parallel (zero area)".into())
+                    );
                 }
             }
         }
+        Ok(())
     }
-    Ok(())
 }
 
 /// Check a mesh after its transform: every vertex within

@@ -1,6 +1,6 @@
 //! Helpers shared by the integration tests: scenes built in memory from
-//! small OBJ files written to a temporary folder, and the meshes, procedural
-//! scenes and ray sets of the BVH tests.
+//! small OBJ files written to a temporary folder, and the meshes and
+//! procedural scenes of the BVH tests (their rays come from `rtdiff::rays`).
 
 #![allow(dead_code)]
 
@@ -12,11 +12,29 @@ use glam::Vec3;
 use rtdiff::backends;
 use rtdiff::backends::AccelConfig;
 use rtdiff::film::Image;
-use rtdiff::geometry::{Prim, Primitives, Ray, Sphere, Triangle};
+use rtdiff::geometry::{Primitives, Sphere, Triangle};
 use rtdiff::mesh::{Content, Mesh, load_mesh as load_mesh_file};
 use rtdiff::render::{RenderOptions, RenderResult, render};
 use rtdiff::rng::Pcg32;
 use rtdiff::scene::{Scene, SceneFile};
+/// The repository's root folder.
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Run `cmd` and return its standard output; a failure to start or a non-zero exit panics
+/// with the command and both outputs.
+pub fn run(cmd: &mut std::process::Command) -> String {
+    let out = cmd.output().unwrap_or_else(|e| panic!("{cmd:?}: {e}"));
+    assert!(
+        out.status.success(),
+        "{cmd:?} failed:\n{}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
 /// Every scene file in `scenes/`, sorted.
 pub fn scene_files() -> Vec<PathBuf> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
@@ -94,11 +112,6 @@ pub fn assert_close(a: Vec3, b: Vec3, rel: f32) {
 pub fn load_mesh(name: &str) -> Mesh {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets").join(format!("{name}.obj"));
     load_mesh_file(&path, Content::WithMaterials).unwrap_or_else(|e| panic!("{e}"))
-}
-
-/// Every builder x traversal configuration (watertight triangle test).
-pub fn all_configs() -> Vec<AccelConfig> {
-    backends::native_variants()
 }
 
 fn quad(out: &mut Vec<Triangle>, a: Vec3, b: Vec3, c: Vec3, d: Vec3) {
@@ -213,49 +226,6 @@ pub fn icosphere(levels: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
         faces = next;
     }
     (pos, faces)
-}
-
-/// A random point on primitive `i` (triangle: uniform barycentrics; sphere: uniform on the surface).
-pub fn point_on(prims: &Primitives, i: usize, rng: &mut Pcg32) -> Vec3 {
-    match prims.get(i) {
-        Prim::Triangle(t) => {
-            let (mut a, mut b) = (rng.next_f32(), rng.next_f32());
-            if a + b > 1.0 {
-                (a, b) = (1.0 - a, 1.0 - b);
-            }
-            let v = t.v;
-            v[0] + a * (v[1] - v[0]) + b * (v[2] - v[0])
-        }
-        Prim::Sphere(s) => s.center + s.radius * rng.unit_vector(),
-    }
-}
-
-/// `n` test rays over `prims`: a third with random origins (in the box grown by
-/// half its size) and random directions, a third aimed from such origins at
-/// random points on random primitives (mostly hits, many grazing), a third
-/// aimed likewise but with a finite interval `[t_min, t_max]` around the
-/// target so the closed-interval ends are exercised.
-pub fn parity_rays(prims: &Primitives, n: usize, seed: u64) -> Vec<Ray> {
-    let wb = prims.world_bounds();
-    let e = wb.extent() * 0.5;
-    let (lo, hi) = (wb.min - e, wb.max + e);
-    let mut rng = Pcg32::new(seed, 11);
-    (0..n)
-        .map(|k| {
-            let o = rng.in_box(lo, hi);
-            match k % 3 {
-                0 => Ray::new(o, rng.unit_vector()),
-                1 => {
-                    let p = point_on(prims, rng.below(prims.len() as u32) as usize, &mut rng);
-                    Ray::new(o, p - o)
-                }
-                _ => {
-                    let p = point_on(prims, rng.below(prims.len() as u32) as usize, &mut rng);
-                    Ray::with_range(o, p - o, rng.range(0.0, 0.9), rng.range(0.9, 1.5))
-                }
-            }
-        })
-        .collect()
 }
 
 /// The Python of `.venv/` (made by `scripts/mitsuba/setup.sh`), or `None` with a note on stderr

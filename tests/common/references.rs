@@ -4,6 +4,8 @@
 
 use std::path::{Path, PathBuf};
 
+use super::root;
+
 use rtdiff::accel::Tracer;
 use rtdiff::backends;
 use rtdiff::film::Image;
@@ -12,10 +14,6 @@ use rtdiff::scene::digest::traced_sha256;
 use rtdiff::scene::export::mitsuba::force_shading_model;
 use rtdiff::scene::{Overrides, Scene, SceneFile};
 use rtdiff::shading::ShadingModelKind;
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
 
 /// One entry of reference/manifest.json.
 #[derive(Clone, Debug)]

@@ -4,6 +4,7 @@
 use super::{Context, Overlay};
 use crate::debug::lines::{Lines, color};
 use crate::error::{Error, Result};
+use crate::geometry::Prim;
 
 /// One leaf and its primitives.
 pub struct BvhLeaf {
@@ -29,13 +30,13 @@ impl Overlay for BvhLeaf {
         };
         let node = bvh.nodes[i];
         let mut lines = Lines::default();
-        let nt = bvh.prims.num_triangles;
         for e in &bvh.prims.entries[node.offset as usize..(node.offset + node.count) as usize] {
-            if e.id < nt {
-                lines.triangle(e.v, color::CYAN);
-            } else {
-                for axis in [glam::Vec3::X, glam::Vec3::Y, glam::Vec3::Z] {
-                    lines.circle(e.v[0], axis, e.v[1].x, 48, color::CYAN);
+            match ctx.scene.prims.get(e.id as usize) {
+                Prim::Triangle(t) => lines.triangle(t.v, color::CYAN),
+                Prim::Sphere(s) => {
+                    for axis in [glam::Vec3::X, glam::Vec3::Y, glam::Vec3::Z] {
+                        lines.circle(s.center, axis, s.radius, 48, color::CYAN);
+                    }
                 }
             }
         }

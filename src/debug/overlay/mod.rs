@@ -47,11 +47,7 @@ impl Context<'_> {
     /// The pinhole camera ray through the centre of pixel `(x, y)` (the ray
     /// `rtdiff debug --pixel` traces), after checking the pixel is in the image.
     pub fn pixel_ray(&self, x: u32, y: u32) -> Result<Ray> {
-        let s = self.scene;
-        if x >= s.width || y >= s.height {
-            return Err(Error::Invalid(format!("pixel ({x}, {y}) is outside the {}x{} image", s.width, s.height)));
-        }
-        Ok(s.camera.ray(x as f32 + 0.5, y as f32 + 0.5))
+        super::pixel::pixel_ray(self.scene, x, y)
     }
 
     /// The first hit along the camera ray through pixel `(x, y)`.

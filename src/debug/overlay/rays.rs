@@ -10,10 +10,8 @@ use glam::Vec3;
 
 use super::{Context, Overlay};
 use crate::debug::lines::{Lines, color};
-use crate::error::{Error, Result};
-use crate::integrator::debug::{RayKind, RayNode, RayTree};
-use crate::integrator::{Counters, Whitted};
-use crate::rng::Pcg32;
+use crate::error::Result;
+use crate::integrator::debug::RayNode;
 
 /// The ray tree of one pixel.
 pub struct RayTreeLines {
@@ -56,15 +54,9 @@ impl Overlay for RayTreeLines {
 
     fn lines(&self, ctx: &Context) -> Result<Lines> {
         let (x, y) = self.pixel;
-        let ray = ctx.pixel_ray(x, y)?;
-        let scene = ctx.scene;
-        let integ = Whitted::new(scene, ctx.tracer, scene.plan());
-        let mut tree = RayTree::default();
-        let mut rng = Pcg32::for_pixel(scene.seed, x, y);
-        integ.trace_as(RayKind::Camera, &ray, 0, &mut rng, &mut Counters::default(), &mut tree);
-        let root = tree.roots.first().ok_or_else(|| Error::Invalid("no ray was traced".into()))?;
+        let traced = crate::debug::pixel::trace_pixel_with(ctx.scene, ctx.tracer, x, y)?;
         let mut lines = Lines::default();
-        add_node(ctx, root, &mut lines);
+        add_node(ctx, &traced.root, &mut lines);
         Ok(lines)
     }
 }

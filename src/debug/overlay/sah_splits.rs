@@ -78,13 +78,12 @@ impl Overlay for SahSplits {
         }
         let prims = &ctx.scene.prims;
         let builder = ctx.accel.builder;
-        // Each builder's centroid: the box centre, or the reports' vertex mean.
+        // Each builder's centroid: the box centre, or the reports' vertex mean (the builder's own input).
+        let input = crate::bvh::build::BuildInput::new(prims, builder == Builder::SahVolume);
         let centroid = |id: u32| -> Vec3 {
-            let id = id as usize;
-            match (builder, prims.triangles.get(id)) {
-                (Builder::SahVolume, Some(t)) => (t.v[0] + t.v[1] + t.v[2]) / 3.0,
-                (Builder::SahVolume, None) => prims.spheres[id - prims.triangles.len()].center,
-                _ => prims.bounds(id).center(),
+            match input.vertex_means.get(id as usize) {
+                Some(&mean) => mean.into(),
+                None => prims.bounds(id as usize).center(),
             }
         };
         let (first, end) = prim_range(&bvh, i);

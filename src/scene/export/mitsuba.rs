@@ -27,7 +27,6 @@ use glam::{Vec2, Vec3};
 use crate::error::{Error, Result};
 use crate::features::Plan;
 use crate::film::Image;
-use crate::light::LightSampling;
 use crate::scene::digest::traced_sha256;
 use crate::scene::file::LightSpec;
 use crate::scene::{Overrides, Scene, SceneFile};
@@ -96,13 +95,39 @@ pub fn export_mitsuba(scene: &Scene, lights: &[LightSpec], dir: &Path) -> Result
         ..Default::default()
     };
     warn_unsupported(scene, &plan, &mut report.warnings);
-
     for sub in ["meshes", "textures"] {
         let p = dir.join(sub);
         std::fs::create_dir_all(&p).map_err(|e| Error::file(&p, format!("cannot create folder: {e}")))?;
     }
 
-    // Group triangles by (material, textured) in first-use order.
+    let mut xml = String::new();
+    let _ = writeln!(xml, "<?xml version=\"1.0\" encoding=\"utf-8\"?>");
+    let _ = writeln!(xml, "<!-- Exported by rtdiff from {} -->", xml_escape(&scene.path.display().to_string()));
+    let _ = writeln!(xml, "<scene version=\"3.0.0\">");
+    write_integrator(&mut xml, scene);
+    write_sensor(&mut xml, scene, &plan, &report);
+    let mut shapes = Shapes { scene, plan: &plan, dir, textures: Vec::new(), json: Vec::new() };
+    shapes.meshes(&mut xml, &mut report)?;
+    shapes.spheres(&mut xml);
+    let _ = writeln!(xml, "</scene>");
+    let xml_path = dir.join("scene.xml");
+    write_text(&xml_path, xml)?;
+    report.files.insert(0, xml_path);
+
+    let config = sidecar(scene, &plan, lights, shapes.json, &report);
+    let cfg_path = dir.join("rtdiff.json");
+    let text = serde_json::to_string_pretty(&config).map_err(|e| Error::Invalid(format!("rtdiff.json: {e}")))?;
+    write_text(&cfg_path, text + "\n")?;
+    report.files.insert(1, cfg_path);
+    Ok(report)
+}
+
+fn write_text(path: &Path, text: String) -> Result<()> {
+    std::fs::write(path, text).map_err(|e| Error::file(path, format!("cannot write: {e}")))
+}
+
+/// Triangles grouped by (material, textured), groups in order of first use.
+fn group_triangles(scene: &Scene, plan: &Plan) -> Vec<Group> {
     let mut groups: Vec<Group> = Vec::new();
     let mut index: BTreeMap<(u32, bool), usize> = BTreeMap::new();
     for (i, sh) in scene.triangle_shading.iter().enumerate() {
@@ -114,75 +139,77 @@ pub fn export_mitsuba(scene: &Scene, lights: &[LightSpec], dir: &Path) -> Result
         });
         groups[g].triangles.push(i);
     }
+    groups
+}
 
-    // Textures: the linear texels rtdiff looks up, one EXR per texture.
-    let mut texture_files: Vec<(*const Texture, String)> = Vec::new();
-    let mut texture_name = |t: &std::sync::Arc<Texture>, report: &mut ExportReport| -> Result<String> {
+/// The shapes of an export: their XML, their files and their entries of `rtdiff.json`.
+struct Shapes<'a> {
+    scene: &'a Scene,
+    plan: &'a Plan,
+    dir: &'a Path,
+    /// Textures written so far, by identity, with their file names.
+    textures: Vec<(*const Texture, String)>,
+    /// `{ id, material }` of every shape, for `rtdiff.json`.
+    json: Vec<serde_json::Value>,
+}
+
+impl Shapes<'_> {
+    /// One PLY shape per triangle group.
+    fn meshes(&mut self, xml: &mut String, report: &mut ExportReport) -> Result<()> {
+        for (gi, g) in group_triangles(self.scene, self.plan).iter().enumerate() {
+            let id = format!("s{gi}_m{}", g.material);
+            let ply = format!("meshes/{id}.ply");
+            let path = self.dir.join(&ply);
+            write_ply(self.scene, &g.triangles, &path)?;
+            report.files.push(path);
+            let m = &self.scene.materials[g.material as usize];
+            let texture = match (&m.kd_texture, g.textured) {
+                (Some(t), true) => Some(self.texture(t, report)?),
+                _ => None,
+            };
+            let _ = writeln!(xml, "    <shape type=\"ply\" id=\"{id}\">");
+            let _ = writeln!(xml, "        <string name=\"filename\" value=\"{ply}\"/>");
+            // Flat shading uses the face normal, as rtdiff does with normal interpolation off.
+            let _ =
+                writeln!(xml, "        <boolean name=\"face_normals\" value=\"{}\"/>", !self.plan.normal_interpolation);
+            write_bsdf(xml, m.kd, texture.as_deref(), self.plan.bilinear);
+            let _ = writeln!(xml, "    </shape>");
+            self.json.push(serde_json::json!({ "id": id, "material": g.material }));
+        }
+        Ok(())
+    }
+
+    /// One sphere shape per sphere (with its kd colour: see [`warn_unsupported`]).
+    fn spheres(&mut self, xml: &mut String) {
+        for (si, s) in self.scene.prims.spheres.iter().enumerate() {
+            let material = self.scene.sphere_materials[si];
+            let id = format!("sphere{si}_m{material}");
+            let _ = writeln!(xml, "    <shape type=\"sphere\" id=\"{id}\">");
+            let _ = writeln!(xml, "        <point name=\"center\" value=\"{}\"/>", v3(s.center));
+            let _ = writeln!(xml, "        <float name=\"radius\" value=\"{}\"/>", s.radius);
+            write_bsdf(xml, self.scene.materials[material as usize].kd, None, false);
+            let _ = writeln!(xml, "    </shape>");
+            // The centre (and radius) give the sphere's hit-point error bound to the plugin's spawn rule.
+            self.json.push(serde_json::json!({
+                "id": id, "material": material, "center": [s.center.x, s.center.y, s.center.z], "radius": s.radius
+            }));
+        }
+    }
+
+    /// The file name of texture `t`, written as an EXR of the linear texels rtdiff looks up on first use.
+    fn texture(&mut self, t: &std::sync::Arc<Texture>, report: &mut ExportReport) -> Result<String> {
         let key = std::sync::Arc::as_ptr(t);
-        if let Some((_, n)) = texture_files.iter().find(|(k, _)| *k == key) {
+        if let Some((_, n)) = self.textures.iter().find(|(k, _)| *k == key) {
             return Ok(n.clone());
         }
-        let name = format!("textures/texture_{}.exr", texture_files.len());
+        let name = format!("textures/texture_{}.exr", self.textures.len());
         let img = Image { width: t.width, height: t.height, pixels: t.texels.clone() };
-        let path = dir.join(&name);
+        let path = self.dir.join(&name);
         img.write(&path)?;
         report.files.push(path);
-        texture_files.push((key, name.clone()));
+        self.textures.push((key, name.clone()));
         Ok(name)
-    };
-
-    let mut xml = String::new();
-    let _ = writeln!(xml, "<?xml version=\"1.0\" encoding=\"utf-8\"?>");
-    let _ = writeln!(xml, "<!-- Exported by rtdiff from {} -->", xml_escape(&scene.path.display().to_string()));
-    let _ = writeln!(xml, "<scene version=\"3.0.0\">");
-    write_integrator(&mut xml, scene);
-    write_sensor(&mut xml, scene, &plan, &report);
-
-    let mut shapes = Vec::new();
-    for (gi, g) in groups.iter().enumerate() {
-        let id = format!("s{gi}_m{}", g.material);
-        let ply = format!("meshes/{id}.ply");
-        let path = dir.join(&ply);
-        write_ply(scene, &g.triangles, &path)?;
-        report.files.push(path);
-        let m = &scene.materials[g.material as usize];
-        let texture = match (&m.kd_texture, g.textured) {
-            (Some(t), true) => Some(texture_name(t, &mut report)?),
-            _ => None,
-        };
-        let _ = writeln!(xml, "    <shape type=\"ply\" id=\"{id}\">");
-        let _ = writeln!(xml, "        <string name=\"filename\" value=\"{ply}\"/>");
-        // Flat shading uses the face normal, as rtdiff does with normal interpolation off.
-        let _ = writeln!(xml, "        <boolean name=\"face_normals\" value=\"{}\"/>", !plan.normal_interpolation);
-        write_bsdf(&mut xml, m.kd, texture.as_deref(), plan.bilinear);
-        let _ = writeln!(xml, "    </shape>");
-        shapes.push(serde_json::json!({ "id": id, "material": g.material }));
     }
-    for (si, s) in scene.prims.spheres.iter().enumerate() {
-        let material = scene.sphere_materials[si];
-        let id = format!("sphere{si}_m{material}");
-        let _ = writeln!(xml, "    <shape type=\"sphere\" id=\"{id}\">");
-        let _ = writeln!(xml, "        <point name=\"center\" value=\"{}\"/>", v3(s.center));
-        let _ = writeln!(xml, "        <float name=\"radius\" value=\"{}\"/>", s.radius);
-        write_bsdf(&mut xml, scene.materials[material as usize].kd, None, false);
-        let _ = writeln!(xml, "    </shape>");
-        // The centre (and radius) give the sphere's hit-point error bound to the plugin's spawn rule.
-        shapes.push(serde_json::json!({
-            "id": id, "material": material, "center": [s.center.x, s.center.y, s.center.z], "radius": s.radius
-        }));
-    }
-    let _ = writeln!(xml, "</scene>");
-
-    let xml_path = dir.join("scene.xml");
-    std::fs::write(&xml_path, xml).map_err(|e| Error::file(&xml_path, format!("cannot write: {e}")))?;
-    report.files.insert(0, xml_path);
-
-    let config = sidecar(scene, &plan, lights, shapes, &report);
-    let cfg_path = dir.join("rtdiff.json");
-    let text = serde_json::to_string_pretty(&config).map_err(|e| Error::Invalid(format!("rtdiff.json: {e}")))?;
-    std::fs::write(&cfg_path, text + "\n").map_err(|e| Error::file(&cfg_path, format!("cannot write: {e}")))?;
-    report.files.insert(1, cfg_path);
-    Ok(report)
 }
 
 /// Pixel centres and no stochastic feature: one sample per pixel is exact.
@@ -336,22 +363,6 @@ fn write_ply(scene: &Scene, triangles: &[usize], path: &Path) -> Result<()> {
     f.write_all(&out).map_err(|e| Error::file(path, format!("cannot write: {e}")))
 }
 
-fn light_json(l: &LightSpec) -> serde_json::Value {
-    let a = |v: Vec3| [v.x, v.y, v.z];
-    match *l {
-        LightSpec::Point { position, color } => {
-            serde_json::json!({ "type": "point", "position": a(position), "color": a(color) })
-        }
-        LightSpec::Segment { endpoints, colors } => serde_json::json!({
-            "type": "segment", "endpoints": [a(endpoints[0]), a(endpoints[1])], "colors": [a(colors[0]), a(colors[1])]
-        }),
-        LightSpec::Parallelogram { v0, edge01, edge02, colors } => serde_json::json!({
-            "type": "parallelogram", "v0": a(v0), "edge01": a(edge01), "edge02": a(edge02),
-            "colors": colors.map(a)
-        }),
-    }
-}
-
 fn sidecar(
     scene: &Scene,
     plan: &Plan,
@@ -366,7 +377,7 @@ fn sidecar(
         .map(|m| {
             serde_json::json!({
                 "name": m.name, "kd": a(m.kd), "ks": a(m.ks), "shininess": m.shininess, "opacity": m.opacity,
-                "model": match m.model { ShadingModelKind::Phong => "phong", ShadingModelKind::Physical => "physical" },
+                "model": m.model,
             })
         })
         .collect();
@@ -385,13 +396,14 @@ fn sidecar(
         "plan": plan,
         "max_depth": p.max_depth,
         "light_samples": p.light_samples,
-        "light_sampling": match p.light_sampling { LightSampling::Jittered => "jittered", LightSampling::Random => "random" },
+        "light_sampling": p.light_sampling,
         "dof_samples": if plan.depth_of_field { p.dof_samples } else { 1 },
         "glossy_samples": p.glossy_samples,
         "ray_offset": p.ray_offset,
         "materials": materials,
         "shapes": shapes,
-        "lights": lights.iter().map(light_json).collect::<Vec<_>>(),
+        // The lights as the scene file gives them.
+        "lights": lights,
         "warnings": report.warnings,
     })
 }

@@ -65,7 +65,7 @@ use serde::Serialize;
 
 use super::exact::{self, BigVec, ExactT, fixed, fixed3};
 use super::line_index::LineIndex;
-use crate::geometry::{Primitives, Ray};
+use crate::geometry::{Prim, Primitives, Ray};
 
 /// Units of rounding a correct float32 tracer may accumulate (the parity
 /// harness's `K`, `hits::bounds` / module docs of the parity harness).
@@ -245,13 +245,12 @@ impl Arbiter {
         let dl = d.length();
         let p = o + d * t;
         let mag = o.abs().max_element() + p.abs().max_element();
-        let nt = self.prims.triangles.len();
-        let (n, bb_geom) = if (prim as usize) < nt {
-            let pre = &self.pre[prim as usize];
-            (pre.n / pre.n_len, pre.longest / pre.n_len)
-        } else {
-            let s = self.prims.spheres[prim as usize - nt];
-            ((p - s.center.as_dvec3()).normalize_or_zero(), f64::INFINITY)
+        let (n, bb_geom) = match self.prims.get(prim as usize) {
+            Prim::Triangle(_) => {
+                let pre = &self.pre[prim as usize];
+                (pre.n / pre.n_len, pre.longest / pre.n_len)
+            }
+            Prim::Sphere(s) => ((p - s.center.as_dvec3()).normalize_or_zero(), f64::INFINITY),
         };
         let c = (d.dot(n) / dl).abs().max(1e-300);
         let plane = U * mag / c;
@@ -291,7 +290,7 @@ impl Arbiter {
     /// Exact evaluation of sphere `j` (global id `nt + j`).
     fn exact_sphere(&self, ray: &Ray, j: usize, o: &BigVec, d: &BigVec) -> Exact {
         let s = self.prims.spheres[j];
-        let prim = (self.prims.triangles.len() + j) as u32;
+        let prim = self.prims.sphere_id(j);
         let f = exact::sub(o, &fixed3(s.center));
         let a = exact::dot(d, d);
         let b = -exact::dot(&f, d);
@@ -360,11 +359,9 @@ impl Arbiter {
     pub fn evaluate(&self, ray: &Ray, prim: u32) -> Exact {
         let o = fixed3(ray.origin);
         let d = fixed3(ray.dir);
-        let nt = self.prims.triangles.len();
-        if (prim as usize) < nt {
-            self.exact_triangle(ray, prim as usize, &o, &d)
-        } else {
-            self.exact_sphere(ray, prim as usize - nt, &o, &d)
+        match self.prims.sphere_index(prim as usize) {
+            None => self.exact_triangle(ray, prim as usize, &o, &d),
+            Some(j) => self.exact_sphere(ray, j, &o, &d),
         }
     }
 
@@ -412,7 +409,7 @@ impl Arbiter {
     }
 
     fn is_triangle(&self, prim: u32) -> bool {
-        (prim as usize) < self.prims.triangles.len()
+        self.prims.sphere_index(prim as usize).is_none()
     }
 
     /// The watertight test's own bound on `t` near the origin (twice its

@@ -6,6 +6,8 @@
 
 use glam::DVec3;
 
+use crate::geometry::aabb::Slab;
+
 /// Leaf size of the index.
 const LEAF: usize = 4;
 
@@ -83,23 +85,11 @@ impl LineIndex {
         if self.nodes.is_empty() {
             return;
         }
-        let inv = d.recip();
+        let line = Slab::from_line(o.to_array(), d.to_array());
         let meets = |n: &Node| {
-            let s = slack(n.lo, n.hi);
-            let (lo, hi) = (n.lo - DVec3::splat(s), n.hi + DVec3::splat(s));
-            let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
-            for a in 0..3 {
-                if d[a] == 0.0 {
-                    if o[a] < lo[a] || o[a] > hi[a] {
-                        return false;
-                    }
-                    continue;
-                }
-                let (p, q) = ((lo[a] - o[a]) * inv[a], (hi[a] - o[a]) * inv[a]);
-                t0 = t0.max(p.min(q));
-                t1 = t1.min(p.max(q));
-            }
-            t0 <= t1
+            let s = DVec3::splat(slack(n.lo, n.hi));
+            // The whole line: finite ends, so a line parallel to a slab and outside it misses.
+            line.clip((n.lo - s).to_array(), (n.hi + s).to_array(), -f64::MAX, f64::MAX, 1.0).is_some()
         };
         let mut stack = vec![0usize];
         while let Some(i) = stack.pop() {

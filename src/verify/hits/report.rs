@@ -134,6 +134,8 @@ pub struct ParityReport {
     pub stress: Vec<StressRow>,
     /// Column labels of the stress report.
     pub stress_tracers: [String; 3],
+    /// Wall-clock seconds of the whole run (sets, tracers, arbiter and stress report).
+    pub seconds: f64,
 }
 
 /// The report as a plain-text table.

@@ -106,6 +106,7 @@ struct Built {
 
 /// Run parity over `ctx` with `opts`.
 pub fn run(ctx: &RayContext, opts: &ParityOptions) -> crate::Result<ParityReport> {
+    let start = std::time::Instant::now();
     let ref_cfg = opts.reference.config();
     let ref_label = ref_cfg.label();
     let build = |prims: &Arc<Primitives>, cfg: &AccelConfig| build_tracer(prims.clone(), cfg);
@@ -230,6 +231,7 @@ pub fn run(ctx: &RayContext, opts: &ParityOptions) -> crate::Result<ParityReport
         sets: sets_out,
         stress,
         stress_tracers: ["watertight".into(), "moller-trumbore".into(), ref_label],
+        seconds: start.elapsed().as_secs_f64(),
     })
 }
 

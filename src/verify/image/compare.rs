@@ -7,8 +7,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::film::Image;
+use crate::film::io::{check_same_size, read_image};
 use crate::verify::image::flip::{DEFAULT_PIXELS_PER_DEGREE, Flip, FlipMode, flip};
-use crate::verify::image::image::{check_same_size, read_image};
 use crate::verify::image::metrics::{CompareOptions, Metrics, compare};
 
 /// Metrics and FLIP of one reference/test pair.

@@ -5,8 +5,8 @@
 use std::path::Path;
 
 use crate::error::Result;
+use crate::film::io::write_rgb8_png;
 use crate::verify::image::flip::Flip;
-use crate::verify::image::image::write_rgb8_png;
 
 /// Colour a per-pixel error map with magma: `value / scale` clamped to [0, 1]
 /// indexes the 256-entry map. Returns row-major 8-bit RGB bytes.

@@ -1,4 +1,4 @@
-//! Image oracle: read and write linear images ([`image`]), pixel metrics
+//! Image oracle: linear images read and written by [`crate::film::io`], pixel metrics
 //! ([`metrics`]), NVIDIA FLIP ([`flip`]), false-colour difference pictures
 //! ([`diff_image`]), the statistical test for noisy renders ([`stats`]) and
 //! the whole comparison of two image files ([`compare`]).
@@ -7,13 +7,12 @@
 pub mod compare;
 pub mod diff_image;
 pub mod flip;
-#[allow(clippy::module_inception)]
-pub mod image;
 pub mod metrics;
 pub mod stats;
 
+pub use crate::film::Image;
+pub use crate::film::io::{read_image, write_exr, write_png};
 pub use compare::{CompareReport, compare_files, compare_images, load_pair};
 pub use flip::{Flip, FlipMode, flip};
-pub use image::{Image, read_image, write_exr, write_png};
 pub use metrics::{CompareOptions, Metrics, compare};
 pub use stats::{Moments, WelchOptions, WelchReport, welch_test};

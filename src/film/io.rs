@@ -1,7 +1,7 @@
-//! Reading and writing linear RGB float images ([`Image`], the film's type) for
-//! the image oracle: EXR (channels chosen by name, any compression, optional
-//! alpha ignored) and PNG (sRGB-decoded to linear) in; byte-deterministic EXR
-//! and 8-bit sRGB PNG out.
+//! Reading and writing the film's linear RGB float images ([`Image`]): the
+//! render's output and the image oracle's input. EXR (channels chosen by name,
+//! any compression, optional alpha ignored) and PNG (sRGB-decoded to linear)
+//! in; byte-deterministic EXR and 8-bit sRGB PNG out.
 //!
 //! Why a writer of our own: the `exr` crate's default encoding
 //! (`Encoding::FAST_LOSSLESS`) declares `LineOrder::Unspecified` and compresses
@@ -19,8 +19,8 @@ use exr::prelude::{
 };
 use glam::Vec3;
 
+use super::Image;
 use crate::error::{Error, Result};
-pub use crate::film::Image;
 use crate::texture::srgb_to_linear;
 
 /// The EXR encoding of [`encode_exr`]: lossless ZIP over 16 scan lines,

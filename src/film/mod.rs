@@ -1,4 +1,6 @@
-//! The film: a linear RGB image and its output formats.
+//! The film: a linear RGB image and its file formats ([`io`]).
+
+pub mod io;
 
 use std::path::Path;
 
@@ -40,16 +42,15 @@ impl Image {
     pub fn write(&self, path: &Path) -> Result<()> {
         let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
         match ext.as_deref() {
-            Some("png") => image::save_buffer(path, &self.to_srgb8(), self.width, self.height, image::ColorType::Rgb8)
-                .map_err(|e| Error::file(path, format!("cannot write PNG: {e}"))),
-            // Byte-deterministic (see `verify::image::image`): same pixels, same file.
-            Some("exr") => crate::verify::image::image::write_exr(self, path),
+            Some("png") => io::write_png(self, path),
+            // Byte-deterministic (see [`io::encode_exr`]): same pixels, same file.
+            Some("exr") => io::write_exr(self, path),
             _ => Err(Error::file(path, "unknown output format: use a .png or .exr file name")),
         }
     }
 
-    /// Read the R, G and B channels of an EXR (see [`crate::verify::image::image::read_exr`]).
+    /// Read the R, G and B channels of an EXR (see [`io::read_exr`]).
     pub fn read_exr(path: &Path) -> Result<Self> {
-        crate::verify::image::image::read_exr(path)
+        io::read_exr(path)
     }
 }
