@@ -34,6 +34,16 @@ fn render(dir: &Path, scene: &str, spp: u32, seed: u32) -> PathBuf {
     out
 }
 
+/// `rtdiff compare A B --json --threshold T`, parsed.
+fn rtdiff_compare(a: &Path, b: &Path, threshold: &str) -> Value {
+    serde_json::from_str(&run(Command::new(env!("CARGO_BIN_EXE_rtdiff")).arg("compare").arg(a).arg(b).args([
+        "--json",
+        "--threshold",
+        threshold,
+    ])))
+    .unwrap()
+}
+
 #[track_caller]
 fn close(what: &str, rust: f64, other: f64, rel: f64) {
     let err = (rust - other).abs() / other.abs().max(1e-300);
@@ -62,12 +72,7 @@ fn metrics_and_flip_match_openimageio_and_flip_evaluator() {
     }
     let oracle: Vec<Value> = serde_json::from_str(&run(&mut cmd)).unwrap();
     for ((a, b), o) in pairs.iter().zip(&oracle) {
-        let r: Value = serde_json::from_str(&run(Command::new(env!("CARGO_BIN_EXE_rtdiff"))
-            .arg("compare")
-            .arg(a)
-            .arg(b)
-            .args(["--json", "--threshold", threshold])))
-        .unwrap();
+        let r = rtdiff_compare(a, b, threshold);
         let name = a.file_name().unwrap().to_string_lossy().to_string();
         let (m, oi) = (&r["metrics"], &o["oiio"]);
         let f = |v: &Value| v.as_f64().unwrap();
@@ -149,12 +154,7 @@ fn compare_matches_openimageio_on_every_reference_pair() {
     let f = |v: &Value| v.as_f64().unwrap();
     let mut worst = 0f64;
     for ((a, b), o) in pairs.iter().zip(&oracle) {
-        let r: Value = serde_json::from_str(&run(Command::new(env!("CARGO_BIN_EXE_rtdiff"))
-            .arg("compare")
-            .arg(a)
-            .arg(b)
-            .args(["--json", "--threshold", threshold])))
-        .unwrap();
+        let r = rtdiff_compare(a, b, threshold);
         let name = b.file_stem().unwrap().to_string_lossy().to_string();
         let (m, oi) = (&r["metrics"], &o["oiio"]);
         for (what, ours, theirs) in [

@@ -435,49 +435,41 @@ fn stale_reference_is_detected() {
     }
 }
 
+/// The Welch check on a wrong variant of the reference `name` (its scene file changed by
+/// `tweak`): must fail.
+fn noisy_fails(name: &str, what: &str, tweak: &dyn Fn(&mut SceneFile)) {
+    let r = reference(name);
+    let w = noisy_check(&r, tweak, &plain);
+    println!("{name} {what}: {}", welch_summary(&w));
+    assert!(!w.passed, "{name}: {what} passed: {}", welch_summary(&w));
+}
+
 /// Depth of field: the thin lens 10% wider blurs everything off the focus plane 10% more
 /// (scenes/depth_of_field.json: checker edges blurred over ~8 pixels; in all_features the
 /// blur is ~1 pixel and a 10% change is below what 64 + 32 seeds can see).
 #[test]
 fn noisy_check_catches_aperture_ten_percent_wide() {
-    let r = reference("depth_of_field.phong");
-    let w = noisy_check(&r, &|f| f.camera.aperture *= 1.1, &plain);
-    println!("{} aperture x1.1: {}", r.name(), welch_summary(&w));
-    assert!(!w.passed, "a 10% wider aperture passed: {}", welch_summary(&w));
+    noisy_fails("depth_of_field.phong", "aperture x1.1", &|f| f.camera.aperture *= 1.1);
 }
 
 /// Glossy reflection: the reports' square of side 1 / shininess 10% wider on the glossy floor
 /// of scenes/glossy.json (the checker cube's reflection blurred 10% more).
 #[test]
 fn noisy_check_catches_glossy_spread_ten_percent_wide() {
-    let r = reference("glossy.phong");
-    let w = noisy_check(
-        &r,
-        &|f| {
-            for m in f.materials.values_mut().filter(|m| m.ks.is_some_and(|ks| ks.x > 0.5)) {
-                m.shininess = m.shininess.map(|s| s / 1.1);
-            }
-        },
-        &plain,
-    );
-    println!("{} glossy spread x1.1: {}", r.name(), welch_summary(&w));
-    assert!(!w.passed, "a 10% wider glossy lobe passed: {}", welch_summary(&w));
+    noisy_fails("glossy.phong", "glossy spread x1.1", &|f| {
+        for m in f.materials.values_mut().filter(|m| m.ks.is_some_and(|ks| ks.x > 0.5)) {
+            m.shininess = m.shininess.map(|s| s / 1.1);
+        }
+    });
 }
 
 /// Transparency: the glass sphere of all_features 10% less transparent (0.6 -> 0.54), so
 /// 10% less of what lies behind it shows through.
 #[test]
 fn noisy_check_catches_transparency_ten_percent_low() {
-    let r = reference("all_features.phong");
-    let w = noisy_check(
-        &r,
-        &|f| {
-            for m in f.materials.values_mut() {
-                m.transparency = m.transparency.map(|t| t * 0.9);
-            }
-        },
-        &plain,
-    );
-    println!("{} transparency x0.9: {}", r.name(), welch_summary(&w));
-    assert!(!w.passed, "a 10% less transparent sphere passed: {}", welch_summary(&w));
+    noisy_fails("all_features.phong", "transparency x0.9", &|f| {
+        for m in f.materials.values_mut() {
+            m.transparency = m.transparency.map(|t| t * 0.9);
+        }
+    });
 }
