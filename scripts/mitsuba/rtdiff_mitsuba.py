@@ -172,7 +172,6 @@ def _register(mi):
                     # sum to 1, so the bound never exceeds this floor).
                     face_scale.extend((np.float32(gamma(7)) * np.abs(v[f]).max(axis=(1, 2))).tolist())
                 rows.append(row)
-            self._rows = rows
             if scalar:
                 self._by_id = {s.id(): r for s, r in zip(shapes, rows)}
                 self._face_scale = face_scale
@@ -319,7 +318,7 @@ def _register(mi):
                 total += f
             return total
 
-        def _glossy_directions(self, sampler, r, ks, shin, depth, active):
+        def _glossy_directions(self, sampler, r, shin, depth, active):
             """The reports' glossy rays around r: (direction, weight / N) pairs, N rays at depth 0."""
             n = self.glossy_samples if depth == 0 else 1
             # Duff et al. 2017, "Building an orthonormal basis, revisited" (listing 3).
@@ -364,7 +363,7 @@ def _register(mi):
                 refl = valid & dr.any(ks != 0.0)
                 r = dr.normalize(d - 2.0 * dr.dot(d, ns) * ns)
                 if self.plan["glossy"]:
-                    for g, share in self._glossy_directions(sampler, r, ks, shin, depth, refl):
+                    for g, share in self._glossy_directions(sampler, r, shin, depth, refl):
                         ok = refl & (dr.dot(g, ng) > 0.0)  # a ray into the surface sees no light
                         children.append((self._spawn(si.p, err, ng, g), w_here * ks * share, ok))
                 else:
