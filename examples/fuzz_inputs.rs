@@ -311,6 +311,20 @@ struct Tally {
     refused: u64,
     spawned: u64,
     failures: Vec<(String, u64, String)>,
+    /// The slowest inputs, `(seconds, index)`, longest first: where the time per
+    /// input grows with something, before it becomes a hang.
+    slowest: Vec<(f64, u64)>,
+}
+
+/// How many of the slowest inputs the summary lists.
+const SLOWEST: usize = 5;
+
+impl Tally {
+    fn timed(&mut self, secs: f64, index: u64) {
+        self.slowest.push((secs, index));
+        self.slowest.sort_by(|a, b| b.0.total_cmp(&a.0));
+        self.slowest.truncate(SLOWEST);
+    }
 }
 
 static DONE: AtomicU64 = AtomicU64::new(0);
@@ -343,6 +357,7 @@ fn run_range(o: &Opts, start: u64, end: u64) -> Result<Tally, String> {
             }
         });
         let mut current: Option<u64> = None;
+        let mut started = Instant::now();
         let mut oom = false;
         loop {
             match rx.recv_timeout(Duration::from_secs_f64(o.time_limit)) {
@@ -354,9 +369,11 @@ fn run_range(o: &Opts, start: u64, end: u64) -> Result<Tally, String> {
                     match tag {
                         "start" => {
                             current = Some(i);
+                            started = Instant::now();
                             *t.by_kind.entry(kind_name(&rest)).or_default() += 1;
                         }
                         "ran" | "loaded" | "refused" => {
+                            t.timed(started.elapsed().as_secs_f64(), i);
                             match tag {
                                 "ran" => t.ran += 1,
                                 "loaded" => t.loaded += 1,
@@ -470,6 +487,9 @@ fn supervise(o: &Opts) -> i32 {
                 t.refused += x.refused;
                 t.spawned += x.spawned;
                 t.failures.extend(x.failures);
+                for (s, i) in x.slowest {
+                    t.timed(s, i);
+                }
             }
             Err(e) => {
                 eprintln!("fuzz_inputs: {e}");
@@ -499,6 +519,15 @@ fn supervise(o: &Opts) -> i32 {
         count("BADMSG"),
         count("SPAWN")
     );
+    let slow: Vec<String> = t
+        .slowest
+        .iter()
+        .map(|&(s, i)| {
+            let input = generate(&corpus, o.seed, i);
+            format!("{s:.2} s input {i} ({} from {}: {})", input.kind.name(), input.base, input.how)
+        })
+        .collect();
+    println!("slowest inputs (time limit {} s): {}", o.time_limit, slow.join("; "));
     for (tag, i, msg) in t.failures.iter().take(50) {
         let input = generate(&corpus, o.seed, *i);
         println!(

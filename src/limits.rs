@@ -44,6 +44,15 @@ pub const MAX_BLOOM_KERNEL: f32 = 1_024.0;
 /// (2e12)^3 = 8e36 < 3.4e38.
 pub const MAX_COORDINATE: f32 = 1.0e12;
 
+/// Smallest sphere radius relative to the largest absolute coordinate of its
+/// centre, 2^-20: at least 8 to 16 units in the last place of that
+/// coordinate in `f32`. Below it the sphere's surface points cannot be told
+/// from its centre (a radius of 0.75 at z = 4.29e9, where one unit in the
+/// last place is 512), the hit point's rounding error exceeds the radius and
+/// shading and secondary rays are noise; a sphere at the ratio renders, with
+/// visibly quantised shading. Spheres near the origin are unaffected.
+pub const MIN_SPHERE_RADIUS_RELATIVE: f32 = 1.0 / 1_048_576.0;
+
 /// Largest absolute value of a colour or intensity component (material `kd`,
 /// `ks`, light colours, background, bloom scale): sums of millions of
 /// samples stay finite in `f32`.
@@ -57,6 +66,20 @@ pub const MAX_ROTATION_DEGREES: f32 = 1.0e6;
 
 /// Largest number of meshes, spheres, lights or materials in one scene file.
 pub const MAX_SCENE_ITEMS: usize = 65_536;
+
+/// Largest number of primitives (triangles and spheres) in one scene or mesh
+/// file, 2^26 (77 times the full Stanford dragon): about 300 bytes each
+/// once loaded and built (triangle, shading data, BVH), 20 GB at the limit.
+/// Primitive ids are `u32`; this keeps them, and Embree's `3 * triangles`
+/// vertex indices, far from overflowing. Checked as each mesh is added,
+/// before its triangles are copied into the scene.
+pub const MAX_PRIMITIVES: usize = 1 << 26;
+
+/// Largest mesh file in bytes, 4 GiB: the file on disk (checked before it is
+/// read) and, for gzip files, the decompressed data (checked while
+/// decompressing, so a small file that expands without end, a "gzip bomb",
+/// stops at the limit).
+pub const MAX_MESH_FILE_BYTES: u64 = 4 << 30;
 
 /// Largest scene file in bytes (checked before it is read).
 pub const MAX_SCENE_FILE_BYTES: u64 = 16 << 20;
@@ -121,7 +144,8 @@ pub fn check_flag<T: PartialOrd + std::fmt::Display + Copy>(flag: &str, value: T
 pub const HELP: &str = "Limits (an input past one is refused with a message naming it): \
 image side 16384 px and 2^25 px in all; spp 65536; light/glossy/dof samples 4096; max_depth 64; \
 worst-case rays per render 2^40; bloom kernel 1024 px; |coordinates| 1e12; |colours| 1e12; \
-shininess 1e6; |rotation| 1e6 degrees; 65536 meshes/spheres/lights/materials; scene file 16 MiB; \
+shininess 1e6; |rotation| 1e6 degrees; sphere radius at least 2^-20 of its centre's largest |coordinate|; \
+65536 meshes/spheres/lights/materials; 2^26 primitives; scene file 16 MiB; mesh file 4 GiB (gzip: decompressed); \
 textures 16384 px a side and 2^26 texels; rays per set or file 2^24 (file 2 GiB); bench --size 4096; \
 threads 1024; runs/rounds 10000; parity --examples 10000. See docs/scene-format.md.";
 
@@ -148,6 +172,10 @@ mod tests {
         assert_eq!(MAX_TEXTURE_PIXELS, 1 << 26);
         assert_eq!(MAX_SCENE_FILE_BYTES, 16 << 20);
         assert_eq!(MAX_RAY_FILE_BYTES, 2 << 30);
+        assert_eq!(MAX_PRIMITIVES, 1 << 26);
+        assert_eq!(MAX_MESH_FILE_BYTES, 1 << 32);
+        assert_eq!(MIN_SPHERE_RADIUS_RELATIVE, 2f32.powi(-20));
+        assert!(HELP.contains("2^26 primitives") && HELP.contains("mesh file 4 GiB") && HELP.contains("2^-20"));
     }
 
     #[test]

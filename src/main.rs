@@ -37,6 +37,16 @@ enum Command {
 }
 
 fn main() {
+    // Rust starts with SIGPIPE ignored, so printing to a pipe whose reader has
+    // gone (`rtdiff compare a.exr b.exr | head -1`) fails, and `println!`
+    // panics on the failure. Restore the default action instead: the
+    // process ends quietly on a closed pipe, like any Unix filter. Only
+    // stdout and stderr are pipes here (no child's stdin is written).
+    // SAFETY: called first, before any thread exists; SIG_DFL is a valid action.
+    #[cfg(unix)]
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Render(a) => rtdiff::cli::render::run(a),

@@ -131,7 +131,9 @@ pub fn render(scene: &Scene, tracer: &dyn Tracer, opts: &RenderOptions) -> Resul
             })
             .collect::<Vec<Counters>>()
     };
-    let rows = with_threads(opts.threads, work)?;
+    // Work is split by rows: a pool larger than the image's row count (a
+    // 3-row render with `--threads 1024`) would only spend time starting threads.
+    let rows = with_threads(opts.threads.map(|n| n.min(h as usize)), work)?;
     let seconds = start.elapsed().as_secs_f64();
     bar.finish_and_clear();
     let mut counters = Counters::default();

@@ -190,6 +190,13 @@ fn heatmap_image_has_the_picture_a_colour_bar_and_the_exr_the_counts() {
     let hm = debug::heatmap(&scene, &scene.accel, &QUIET).unwrap();
     let img = hm.image(Metric::Nodes, None);
     assert!(img.width() > 40 && img.height() > 40);
+    // A small map does not cut its title and statistics short: the canvas widens, so the
+    // title band's last columns hold no text (drawn in (235, 235, 235)).
+    for y in 0..36 {
+        for x in img.width() - 6..img.width() {
+            assert_ne!(img.get_pixel(x, y).0, [235, 235, 235], "text reaches the right edge at ({x}, {y})");
+        }
+    }
     let dir = common::temp_dir("heatmap-exr");
     let exr = dir.join("h.exr");
     hm.write_exr(&exr).unwrap();

@@ -504,7 +504,13 @@ def _camera_sample(mi, sensor, integrator, scene, sampler, x, y, W, H, spp, s, k
         ox, oy = 0.5, 0.5
     elif square:
         j = sampler.next_2d()
-        ox, oy = ((s % k) + j.x) / k, ((s // k) + j.y) / k
+        cx, cy = s % k, s // k
+        if not mi.variant().startswith("scalar"):
+            # Opaque: one JIT kernel serves every stratum (a literal would compile one per pass).
+            import drjit as dr
+
+            cx, cy = dr.opaque(mi.Float, cx), dr.opaque(mi.Float, cy)
+        ox, oy = (cx + j.x) / k, (cy + j.y) / k
     else:
         j = sampler.next_2d()
         ox, oy = j.x, j.y

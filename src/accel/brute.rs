@@ -27,6 +27,9 @@ impl Tracer for BruteForce {
     }
 
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        if !ray.is_traceable() {
+            return None;
+        }
         let wr = WatertightRay::new(ray.dir);
         let mut r = *ray;
         let mut best = None;
@@ -39,6 +42,9 @@ impl Tracer for BruteForce {
     }
 
     fn occluded(&self, ray: &Ray) -> bool {
+        if !ray.is_traceable() {
+            return false;
+        }
         let wr = WatertightRay::new(ray.dir);
         (0..self.prims.len()).any(|i| self.prims.intersect_prim(i, ray, &wr, self.test).is_some())
     }

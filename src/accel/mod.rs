@@ -11,6 +11,9 @@ pub use brute::BruteForce;
 use crate::geometry::{Hit, Ray};
 
 /// Closest-hit and any-hit queries over a fixed set of [`crate::geometry::Primitives`].
+///
+/// A ray that is not [`Ray::is_traceable`] (a NaN or infinite component, a
+/// zero direction, `t_min > t_max`) hits nothing, in every implementation.
 pub trait Tracer: Send + Sync {
     /// The configuration's one label (`crate::backends::AccelConfig::label`: `brute`, `bvh-sah/fast`, `embree-high`).
     fn name(&self) -> String;

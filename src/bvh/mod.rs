@@ -132,6 +132,9 @@ impl BvhTracer {
     #[inline]
     pub fn intersect_with<C: Count>(&self, ray: &Ray, counts: &mut C) -> Option<Hit> {
         counts.ray();
+        if !ray.is_traceable() {
+            return None;
+        }
         let t = self.cfg.triangle_test;
         match &self.tree {
             Tree::Wide(w) => w.intersect_counting(ray, t, counts),
@@ -154,6 +157,9 @@ impl BvhTracer {
     #[inline]
     pub fn occluded_with<C: Count>(&self, ray: &Ray, counts: &mut C) -> bool {
         counts.ray();
+        if !ray.is_traceable() {
+            return false;
+        }
         let t = self.cfg.triangle_test;
         match &self.tree {
             Tree::Wide(w) => w.occluded_counting(ray, t, counts),

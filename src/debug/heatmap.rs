@@ -178,7 +178,14 @@ impl Heatmap {
         let data_max = counts.iter().copied().max().unwrap_or(0);
         let max = scale_max.unwrap_or(data_max).max(1);
         let (w, h) = (self.width, self.height);
-        let mut img = RgbImage::from_pixel(w + BAR_BAND, h + TITLE_BAND, Rgb([24, 24, 24]));
+        let mean = self.total(metric) as f64 / counts.len().max(1) as f64;
+        let title = format!("{} ({})", metric.title(self.wide), self.tracer);
+        let stats = format!("total {}  mean {:.2}  max {}  scale 0..{}", self.total(metric), mean, data_max, max);
+        // The title at double size when it fits beside a small map, and the canvas wide enough
+        // for both lines: text is never cut off.
+        let title_scale = if text_width(&title, 2) + 12 <= w + BAR_BAND { 2 } else { 1 };
+        let width = (w + BAR_BAND).max(text_width(&title, title_scale) + 12).max(text_width(&stats, 1) + 12);
+        let mut img = RgbImage::from_pixel(width, h + TITLE_BAND, Rgb([24, 24, 24]));
         let cmap = |v: f64| {
             let c = colorous::INFERNO.eval_continuous(v.clamp(0.0, 1.0));
             Rgb([c.r, c.g, c.b])
@@ -188,9 +195,7 @@ impl Heatmap {
             img.put_pixel(x, y + TITLE_BAND, cmap(c as f64 / max as f64));
         }
         let white = Rgb([235, 235, 235]);
-        let mean = self.total(metric) as f64 / counts.len().max(1) as f64;
-        draw_text(&mut img, 6, 4, &format!("{} ({})", metric.title(self.wide), self.tracer), 2, white);
-        let stats = format!("total {}  mean {:.2}  max {}  scale 0..{}", self.total(metric), mean, data_max, max);
+        draw_text(&mut img, 6, 4, &title, title_scale, white);
         draw_text(&mut img, 6, 24, &stats, 1, white);
         // Colour bar: top = max, bottom = 0, ticks at quarters.
         let (bx, bw) = (w + 12, 20);

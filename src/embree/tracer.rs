@@ -6,6 +6,10 @@
 //! interval. Its sphere test (`SphereIntersector1`) uses the open interval
 //! `tnear < t < tfar`; the two differ only for hits exactly at an end point
 //! (a set of measure zero that no ray set aims at).
+//!
+//! Rays that are not [`Ray::is_traceable`] never reach Embree: its kernels
+//! assume valid rays (unless built with `EMBREE_IGNORE_INVALID_RAYS`), and a
+//! NaN direction crashes `rtcIntersect1`. They hit nothing, as in every tracer.
 
 use std::sync::Arc;
 
@@ -80,11 +84,11 @@ impl EmbreeTracer {
     }
 
     /// Write `rays` (at most 8) into the lanes of `r8`; the mask marks the
-    /// lanes to trace (rays with `t_min > t_max` stay inactive).
+    /// lanes to trace (rays that are not [`Ray::is_traceable`] stay inactive).
     fn rtc_ray8(rays: &[Ray], r8: &mut ffi::RTCRay8) -> ffi::Valid8 {
         let mut valid = ffi::Valid8::default();
         for (k, r) in rays.iter().enumerate() {
-            if r.t_min > r.t_max {
+            if !r.is_traceable() {
                 continue;
             }
             valid.0[k] = -1;
@@ -133,7 +137,7 @@ impl Tracer for EmbreeTracer {
     }
 
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        if ray.t_min > ray.t_max {
+        if !ray.is_traceable() {
             return None;
         }
         let mut rh = ffi::RTCRayHit {
@@ -155,7 +159,7 @@ impl Tracer for EmbreeTracer {
     }
 
     fn occluded(&self, ray: &Ray) -> bool {
-        if ray.t_min > ray.t_max {
+        if !ray.is_traceable() {
             return false;
         }
         let mut r = Self::rtc_ray(ray);

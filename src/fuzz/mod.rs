@@ -384,7 +384,7 @@ impl Runner {
     fn scene(&self, path: &Path, ov: &Overrides, threads: Option<usize>) -> Result<Outcome> {
         let mut scene = Scene::load_with(path, ov)?;
         crate::scene::validate::check_render_work(&scene)?;
-        let _ = build_tracer(scene.prims.clone(), &scene.accel)?;
+        let tracer = build_tracer(scene.prims.clone(), &scene.accel)?;
         // Render a 3x3 corner of the camera's view when the scene is cheap at that size.
         scene.width = scene.width.min(3);
         scene.height = scene.height.min(3);
@@ -393,7 +393,7 @@ impl Runner {
         if crate::scene::validate::worst_case_rays(&scene) > RENDER_BUDGET {
             return Ok(Outcome::Accepted { ran: false });
         }
-        crate::pipeline::render_scene(&scene, &crate::render::RenderOptions { threads, quiet: true })?;
+        crate::pipeline::render_with(&scene, tracer.as_ref(), &crate::render::RenderOptions { threads, quiet: true })?;
         Ok(Outcome::Accepted { ran: true })
     }
 

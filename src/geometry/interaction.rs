@@ -59,7 +59,7 @@ impl Triangle {
         SurfaceInteraction {
             p,
             p_err: triangle_point_error(b, v),
-            ng: self.normal().normalize_or_zero(),
+            ng: super::unit_or_zero(self.normal()),
             b,
             prim: hit.prim,
         }

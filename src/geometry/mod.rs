@@ -15,7 +15,7 @@ pub mod triangle;
 pub use aabb::Aabb;
 pub use hit::Hit;
 pub use interaction::SurfaceInteraction;
-pub use normalize::normalize_to_unit_sphere;
+pub use normalize::{normalize_to_unit_sphere, scaled_length, unit_or_zero};
 pub use primitives::{Prim, Primitives, Triangle};
 pub use ray::Ray;
 pub use sphere::Sphere;

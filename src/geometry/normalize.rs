@@ -1,6 +1,7 @@
-//! Mesh normalisation, the one definition used by the scene loader
+//! Normalisation: of meshes, the one definition used by the scene loader
 //! (`"normalize": true`), `bench`, `parity`, `trace` and the tests, so that
-//! all of them trace the same vertices to the bit.
+//! all of them trace the same vertices to the bit; and of vectors whose
+//! squared length overflows `f32` ([`unit_or_zero`], [`scaled_length`]).
 
 use glam::{DVec3, Vec3};
 
@@ -23,6 +24,44 @@ pub fn normalize_to_unit_sphere(positions: &mut [Vec3]) {
     }
 }
 
+/// `2^-e` for the exponent `e` of `m` (`2^e <= m < 2^(e+1)`), `m` finite and
+/// positive: multiplying by it brings `m` into `[1, 2)` exactly (no rounding).
+#[inline]
+pub fn pow2_recip(m: f32) -> f32 {
+    let e = ((m.to_bits() >> 23) & 0xff) as i32 - 127; // subnormals: -127, close enough
+    2f32.powi(-e)
+}
+
+/// `v / |v|`, or zero for a zero or non-finite `v`, also where `|v|^2`
+/// overflows or underflows `f32`: a triangle's `(v1 - v0) x (v2 - v0)` has
+/// components up to 1.6e25 for vertices within [`crate::limits::MAX_COORDINATE`],
+/// whose square overflows, and glam's `normalize_or_zero` then gives zero.
+/// Such a `v` is first scaled by a power of two, which changes no rounding,
+/// so the result equals `normalize_or_zero` wherever that does not overflow.
+#[inline]
+pub fn unit_or_zero(v: Vec3) -> Vec3 {
+    let n = v.normalize_or_zero();
+    if n != Vec3::ZERO || v == Vec3::ZERO {
+        return n;
+    }
+    let m = v.abs().max_element();
+    if !(m.is_finite() && m > 0.0 && v.is_finite()) {
+        return Vec3::ZERO;
+    }
+    (v * pow2_recip(m)).normalize_or_zero()
+}
+
+/// `|v|`, also where `|v|^2` overflows or underflows `f32` (see [`unit_or_zero`]).
+#[inline]
+pub fn scaled_length(v: Vec3) -> f32 {
+    let l = v.length();
+    if (l.is_finite() && l > 0.0) || v == Vec3::ZERO || !v.is_finite() {
+        return l;
+    }
+    let s = pow2_recip(v.abs().max_element());
+    (v * s).length() / s
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -35,5 +74,27 @@ mod tests {
         assert!((m - 1.0).abs() < 1e-6);
         let mean = p.iter().map(|v| v.as_dvec3()).sum::<DVec3>() / 3.0;
         assert!(mean.length() < 1e-7, "{mean}");
+    }
+
+    #[test]
+    fn unit_and_length_of_vectors_whose_square_overflows() {
+        // ~(2e12)^2: the cross product of two edges at the coordinate limit.
+        let unit = Vec3::new(4.0, 3.0, 0.0).normalize();
+        let v = Vec3::new(4.0, 3.0, 0.0) * 2f32.powi(80);
+        assert_eq!(v.normalize_or_zero(), Vec3::ZERO, "glam overflows");
+        assert_eq!(unit_or_zero(v), unit);
+        assert_eq!(scaled_length(v), 5.0 * 2f32.powi(80));
+        let tiny = Vec3::new(4.0, 3.0, 0.0) * 2f32.powi(-100);
+        assert_eq!(tiny.normalize_or_zero(), Vec3::ZERO, "glam underflows");
+        assert_eq!(unit_or_zero(tiny), unit);
+        assert_eq!(scaled_length(tiny), 5.0 * 2f32.powi(-100));
+        // Ordinary vectors: exactly glam's result.
+        for v in [Vec3::new(1.0, 2.0, 3.0), Vec3::new(-1e-3, 7e5, 0.3), Vec3::new(0.1, 0.0, 0.0)] {
+            assert_eq!(unit_or_zero(v), v.normalize_or_zero());
+            assert_eq!(scaled_length(v), v.length());
+        }
+        for v in [Vec3::ZERO, Vec3::new(f32::NAN, 1.0, 0.0), Vec3::new(f32::INFINITY, 0.0, 0.0)] {
+            assert_eq!(unit_or_zero(v), Vec3::ZERO);
+        }
     }
 }

@@ -24,9 +24,9 @@ impl Triangle {
         (self.v[1] - self.v[0]).cross(self.v[2] - self.v[0])
     }
 
-    /// Twice the area.
+    /// Twice the area (finite for vertices within [`crate::limits::MAX_COORDINATE`]).
     pub fn double_area(&self) -> f32 {
-        self.normal().length()
+        super::scaled_length(self.normal())
     }
 }
 

@@ -27,6 +27,25 @@ impl Ray {
         Self { origin, dir, t_min, t_max }
     }
 
+    /// Whether the ray can be traced at all: a finite origin, a finite
+    /// non-zero direction, and an interval whose ends are not NaN with
+    /// `t_min <= t_max`. Every tracer answers "no hit" for a ray that is
+    /// not (Embree's behaviour on such rays is undefined: a NaN direction
+    /// crashes it, and the wide BVH's box test would accept every lane).
+    ///
+    /// ```
+    /// use glam::Vec3;
+    /// use rtdiff::geometry::Ray;
+    /// assert!(Ray::new(Vec3::ZERO, Vec3::Z).is_traceable());
+    /// assert!(!Ray::new(Vec3::ZERO, Vec3::new(0.0, f32::NAN, 1.0)).is_traceable());
+    /// assert!(!Ray::new(Vec3::ZERO, Vec3::ZERO).is_traceable());
+    /// assert!(!Ray::with_range(Vec3::ZERO, Vec3::Z, 1.0, 0.5).is_traceable());
+    /// ```
+    #[inline]
+    pub fn is_traceable(&self) -> bool {
+        self.origin.is_finite() && self.dir.is_finite() && self.dir != Vec3::ZERO && self.t_min <= self.t_max
+    }
+
     /// The point at parameter `t`.
     ///
     /// ```

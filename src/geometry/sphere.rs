@@ -35,12 +35,18 @@ impl Sphere {
         let b = -f.dot(d); // half of the usual -b
         let l = f + (b / a) * d; // centre -> point of closest approach
         let r2 = self.radius * self.radius;
-        let disc = a * (r2 - l.dot(l));
-        if disc < 0.0 {
+        let h = r2 - l.dot(l);
+        if h.is_nan() || h < 0.0 {
             return None;
         }
         let c = f.dot(f) - r2;
-        let sq = disc.sqrt();
+        // sqrt(a (r^2 - |l|^2)) as a product of square roots: `a` is the
+        // squared length of an unnormalised direction (a shadow ray's
+        // `target - origin`, up to (2 sqrt(3) MAX_COORDINATE)^2 = 1.2e25)
+        // and `r^2 - |l|^2` up to MAX_COORDINATE^2 = 1e24, so their product
+        // overflows f32 and would give t = c / inf = 0 (a false hit at the
+        // ray's origin).
+        let sq = a.sqrt() * h.sqrt();
         let q = if b >= 0.0 { b + sq } else { b - sq };
         let (mut t0, mut t1) = if q == 0.0 { (0.0, 0.0) } else { (c / q, q / a) };
         if t0 > t1 {
@@ -73,6 +79,22 @@ mod tests {
         assert_eq!(s.intersect(&r).unwrap().0, 1.0);
         let r = Ray::new(Vec3::ZERO, -Vec3::Z);
         assert!(s.intersect(&r).is_none());
+    }
+
+    #[test]
+    fn long_unnormalised_direction_at_the_coordinate_limit() {
+        // A shadow ray from -1e12 to +1e12 (direction 2e12 long, t in [0, 1])
+        // through a sphere of radius 1e11: entry at t = 0.45 exactly.
+        let m = crate::limits::MAX_COORDINATE;
+        let s = Sphere { center: Vec3::ZERO, radius: 0.1 * m };
+        for dir in [Vec3::new(2.0 * m, 0.0, 0.0), Vec3::new(2.0 * m, 2.0 * m, 2.0 * m)] {
+            let r = Ray::with_range(-dir * 0.5, dir, 0.0, 1.0);
+            let t = s.intersect(&r).expect("hit").0;
+            // Entry at |origin| - r = |dir| / 2 - 0.1 m along the ray: t = 0.5 - 0.1 m / |dir|.
+            let exact = 0.5 - 0.1 * m as f64 / dir.as_dvec3().length();
+            // A few roundings of a quantity of size ~1 (eps = 1.2e-7).
+            assert!((t as f64 - exact).abs() < 1e-6, "t = {t}, exact {exact}");
+        }
     }
 
     #[test]

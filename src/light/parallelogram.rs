@@ -24,12 +24,12 @@ pub struct ParallelogramLight {
 impl ParallelogramLight {
     /// Area of the parallelogram.
     pub fn area(&self) -> f32 {
-        self.edge01.cross(self.edge02).length()
+        crate::geometry::scaled_length(self.edge01.cross(self.edge02))
     }
 
     /// Unit normal of the emitting side.
     pub fn normal(&self) -> Vec3 {
-        self.edge01.cross(self.edge02).normalize_or_zero()
+        crate::geometry::unit_or_zero(self.edge01.cross(self.edge02))
     }
 }
 

@@ -71,10 +71,17 @@ pub fn load_mesh(path: &Path, content: Content) -> Result<Mesh> {
             ));
         }
     };
-    match format {
+    let mesh = match format {
         Format::Obj => obj::load(path, encoding::decode_text(bytes).0, content),
         Format::Ply => ply::load(path, &bytes, content),
+    }?;
+    if mesh.indices.len() > crate::limits::MAX_PRIMITIVES {
+        return Err(Error::file(
+            path,
+            format!("{} triangles, over the limit of {} primitives", mesh.indices.len(), crate::limits::MAX_PRIMITIVES),
+        ));
     }
+    Ok(mesh)
 }
 
 /// Where a material's texture was named: for errors that point at the MTL line.
@@ -194,15 +201,21 @@ impl Mesh {
 
     /// Replace `normals` by area-weighted averages of the adjacent face normals.
     pub fn compute_normals(&mut self) {
+        // Products of coordinates beyond 2^60 (a file's raw vertices may be
+        // anything finite; a transform brings them within the limits later)
+        // would overflow f32: scale such a mesh by a power of two first, which
+        // leaves the directions, and every ordinary mesh, bit for bit unchanged.
+        let extent = self.positions.iter().fold(0f32, |m, p| m.max(p.abs().max_element()));
+        let s = if extent > 2f32.powi(60) { crate::geometry::normalize::pow2_recip(extent) } else { 1.0 };
         let mut acc = vec![Vec3::ZERO; self.positions.len()];
         for t in &self.indices {
-            let [a, b, c] = t.map(|i| self.positions[i as usize]);
+            let [a, b, c] = t.map(|i| self.positions[i as usize] * s);
             let n = (b - a).cross(c - a); // length = 2 * area
             for &i in t {
                 acc[i as usize] += n;
             }
         }
-        self.normals = acc.into_iter().map(|n| n.normalize_or_zero()).collect();
+        self.normals = acc.into_iter().map(crate::geometry::unit_or_zero).collect();
         self.file_normals = false;
     }
 

@@ -34,6 +34,12 @@ struct ManifestEntry {
     deterministic: bool,
     seeds: Vec<u64>,
     image: String,
+    #[serde(default)]
+    features: Vec<String>,
+    #[serde(default)]
+    light_samples: Option<u32>,
+    #[serde(default)]
+    variance: Option<String>,
 }
 
 /// One scene and model compared with Mitsuba.
@@ -72,16 +78,67 @@ pub struct MitsubaReport {
     pub rows: Vec<MitsubaRow>,
 }
 
-/// Compare every reference of `root/reference/manifest.json`, writing the pictures into `images`.
-/// `Ok(None)` when the project has no references.
-pub fn run(root: &Path, images: &Path, quiet: bool) -> Result<Option<MitsubaReport>> {
-    let dir = root.join("reference");
-    let path = dir.join("manifest.json");
+fn manifest(root: &Path) -> Result<Option<Manifest>> {
+    let path = root.join("reference").join("manifest.json");
     if !path.exists() {
         return Ok(None);
     }
     let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, &e))?;
-    let m: Manifest = serde_json::from_str(&text).map_err(|e| Error::file(&path, format!("invalid manifest: {e}")))?;
+    serde_json::from_str(&text).map(Some).map_err(|e| Error::file(&path, format!("invalid manifest: {e}")))
+}
+
+/// A Mitsuba reference of a scene as its file stands (no feature switches).
+#[derive(Clone, Debug)]
+pub struct StoredReference {
+    /// The image: one render, or the mean of `seeds` renders.
+    pub image: Image,
+    /// Per-pixel variance of the mean (the renders' sample variance over `seeds`), for noisy scenes.
+    pub variance_of_mean: Option<Image>,
+    /// What it is, for captions: "Mitsuba 3.9.1 (llvm_ad_rgb), mean of 16 seeds x 64 light samples".
+    pub description: String,
+}
+
+/// The reference of `scene` (relative to `root`, e.g. `scenes/cube.json`) in `model` at
+/// `width` x `height`, if `root/reference/manifest.json` lists one.
+pub fn stored_reference(
+    root: &Path,
+    scene: &str,
+    model: ShadingModelKind,
+    width: u32,
+    height: u32,
+) -> Result<Option<StoredReference>> {
+    let Some(m) = manifest(root)? else { return Ok(None) };
+    if (m.width, m.height) != (width, height) {
+        return Ok(None);
+    }
+    let Some(e) = m.references.iter().find(|e| e.scene == scene && e.model == model && e.features.is_empty()) else {
+        return Ok(None);
+    };
+    let dir = root.join("reference");
+    let image = read_image(&dir.join(&e.image))?;
+    let k = e.seeds.len().max(1) as f32;
+    let variance_of_mean = match &e.variance {
+        Some(v) => {
+            let mut var = read_image(&dir.join(v))?;
+            var.pixels.iter_mut().for_each(|p| *p /= k);
+            Some(var)
+        }
+        None => None,
+    };
+    let samples = e.light_samples.map_or_else(String::new, |n| format!(" x {n} light samples"));
+    let description = if e.deterministic {
+        format!("Mitsuba {} ({}), pixel centres", m.mitsuba, m.variant)
+    } else {
+        format!("Mitsuba {} ({}), mean of {} seeds{samples}", m.mitsuba, m.variant, e.seeds.len())
+    };
+    Ok(Some(StoredReference { image, variance_of_mean, description }))
+}
+
+/// Compare every reference of `root/reference/manifest.json`, writing the pictures into `images`.
+/// `Ok(None)` when the project has no references.
+pub fn run(root: &Path, images: &Path, quiet: bool) -> Result<Option<MitsubaReport>> {
+    let dir = root.join("reference");
+    let Some(m) = manifest(root)? else { return Ok(None) };
     std::fs::create_dir_all(images).map_err(|e| Error::io(images, &e))?;
     let bar = super::progress::bar(m.references.len() as u64, "report mitsuba", quiet);
     let mut rows = Vec::new();

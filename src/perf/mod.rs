@@ -10,6 +10,7 @@ pub mod clock;
 pub mod convergence;
 pub mod machine;
 pub mod mitsuba;
+pub mod mitsuba_python;
 pub mod progress;
 pub mod race;
 pub mod stability;

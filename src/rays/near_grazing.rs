@@ -37,7 +37,7 @@ pub fn near_grazing(prims: &Primitives, count: usize, seed: u64) -> Vec<Ray> {
             }
             let (w1, w2) = (0.02 + 0.94 * r1, 0.02 + 0.94 * r2);
             let p = a * (1.0 - w1 - w2) + b * w1 + c * w2;
-            let n = tri.normal().normalize();
+            let n = crate::geometry::unit_or_zero(tri.normal());
             let mut t = rng.unit_vector();
             t = (t - n * t.dot(n)).normalize_or(n.any_orthonormal_vector());
             let theta = (1e-4f32.ln() + rng.f32() * (3e-2f32.ln() - 1e-4f32.ln())).exp();

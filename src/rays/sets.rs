@@ -325,7 +325,7 @@ fn generate_one(ctx: &RayContext, kind: SetKind, name: String, seed: u64, count:
                 while rays.len() < count && attempts < max_attempts {
                     attempts += 1;
                     let tri = prims.triangles[rng.below(nt)];
-                    let nrm = tri.normal().normalize_or_zero();
+                    let nrm = crate::geometry::unit_or_zero(tri.normal());
                     if nrm == Vec3::ZERO {
                         continue;
                     }

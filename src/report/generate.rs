@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::html::{Figure, PictureRow, Section};
+use super::html::{Block, Figure, PictureRow, Section};
 use super::table::{Table, fmt_num};
 use crate::error::{Error, Result};
 use crate::perf::convergence::{ConvergenceOptions, ConvergenceReport};
@@ -94,6 +94,7 @@ pub fn generate(opts: &ReportOptions) -> Result<Generated> {
     let all = opts.kind == ReportKind::All;
     let mut files = Vec::new();
     let mut markdown = String::new();
+    let mut e = Emit { opts, files: &mut files, md: &mut markdown };
     let mut sections = Vec::new();
     let mut machine = None;
     if all || opts.kind == ReportKind::Perf {
@@ -103,28 +104,29 @@ pub fn generate(opts: &ReportOptions) -> Result<Generated> {
         po.quiet = opts.quiet;
         let r = crate::perf::table::run(&po)?;
         machine = Some(super::perf::machine_table(&r.machine));
-        sections.push(perf_files(&r, opts, &mut files, &mut markdown)?);
+        sections.push(perf_files(&r, &mut e)?);
     }
     if all || opts.kind == ReportKind::Convergence {
         let mut co =
             if opts.quick { ConvergenceOptions::quick(&opts.root) } else { ConvergenceOptions::full(&opts.root) };
         co.images = Some(dir.join("images"));
+        co.work = dir.join(".convergence-work");
         co.quiet = opts.quiet;
         let r = crate::perf::convergence::run(&co)?;
-        sections.push(convergence_files(&r, opts, &mut files, &mut markdown)?);
+        sections.push(convergence_files(&r, &mut e)?);
     }
     if all || opts.kind == ReportKind::Stability {
         let mut so = if opts.quick { StabilityOptions::quick(&opts.root) } else { StabilityOptions::full(&opts.root) };
         so.quiet = opts.quiet;
         let r = crate::perf::stability::run(&so)?;
-        sections.push(stability_files(&r, opts, &mut files, &mut markdown)?);
+        sections.push(stability_files(&r, &mut e)?);
     }
     if all {
         let images = dir.join("images");
         if let Some(r) = crate::perf::mitsuba::run(&opts.root, &images, opts.quiet)? {
-            sections.push(mitsuba_files(&r, opts, &mut files, &mut markdown)?);
+            sections.push(mitsuba_files(&r, &mut e)?);
         }
-        sections.push(heatmap_files(opts, &mut files, &mut markdown)?);
+        sections.push(heatmap_files(&mut e)?);
         let header: Vec<_> = machine.into_iter().collect();
         let page = super::html::page("rtdiff report", &header, &sections);
         write(&dir.join("index.html"), &page, &mut files)?;
@@ -133,74 +135,111 @@ pub fn generate(opts: &ReportOptions) -> Result<Generated> {
     Ok(Generated { files, markdown, seconds: start.elapsed().as_secs_f64() })
 }
 
-fn perf_files(r: &PerfReport, opts: &ReportOptions, files: &mut Vec<PathBuf>, md: &mut String) -> Result<Section> {
-    let dir = &opts.out;
-    let text = super::perf::perf_markdown(r);
-    write_json(&dir.join("perf.json"), r, files)?;
-    write(&dir.join("perf.md"), &text, files)?;
-    let svg = dir.join("perf.svg");
-    super::perf::perf_plot(r, &svg)?;
-    files.push(svg.clone());
-    md.push_str(&text);
-    md.push('\n');
-    Ok(Section {
-        id: "perf".into(),
-        title: "Performance".into(),
-        intro: "The reports' performance table (\"Performance Test\" in ../shared/seeds/), measured on this machine, \
-                with the reports' published figures beside it."
-            .into(),
-        tables: vec![super::perf::perf_table(r)],
-        figures: vec![Figure {
-            file: rel(dir, &svg),
-            caption: "Render time per builder/traversal and scene: rtdiff's median with its min-max (filled) and \
-                      the reports' figure (hollow)."
-                .into(),
-        }],
-        pictures: Vec::new(),
-        command: command("perf", opts),
-        data: vec!["perf.json".into(), "perf.md".into()],
-    })
+/// What every section writes, in one place: its typed result as `NAME.json` (when it has one), its
+/// Markdown as `NAME.md` (also added to the combined Markdown), the files its figures and pictures
+/// show (recorded as written); and the section, with its data links.
+struct Emit<'a> {
+    opts: &'a ReportOptions,
+    files: &'a mut Vec<PathBuf>,
+    md: &'a mut String,
 }
 
-fn convergence_files(
-    r: &ConvergenceReport,
-    opts: &ReportOptions,
-    files: &mut Vec<PathBuf>,
-    md: &mut String,
-) -> Result<Section> {
-    let dir = &opts.out;
-    let text = super::convergence::convergence_markdown(r);
-    write_json(&dir.join("convergence.json"), r, files)?;
-    write(&dir.join("convergence.md"), &text, files)?;
-    let plots = super::convergence::convergence_plots(r, dir)?;
-    md.push_str(&text);
-    md.push('\n');
-    let captions = [
-        "relMSE against samples per feature (solid) with the fitted power law (dashed).",
-        "relMSE against render time: the time to reach an error (dashed: the target).",
-        "Mean LDR-FLIP against samples.",
-    ];
-    let figures = plots.iter().zip(captions).map(|(p, c)| Figure { file: rel(dir, p), caption: c.into() }).collect();
-    files.extend(plots);
-    let mut pictures = Vec::new();
+impl Emit<'_> {
+    /// A block of figures written at `paths` (with their captions).
+    fn figures(&mut self, paths: Vec<(PathBuf, String)>) -> Block {
+        Block::Figures(
+            paths
+                .into_iter()
+                .map(|(path, caption)| {
+                    let file = rel(&self.opts.out, &path);
+                    self.files.push(path);
+                    Figure { file, caption }
+                })
+                .collect(),
+        )
+    }
+
+    /// A picture row whose files are in `images/`.
+    fn pictures(&mut self, row: PictureRow) -> Block {
+        for f in [&row.render, &row.reference, &row.difference.0, &row.flip.0] {
+            self.files.push(self.opts.out.join(f));
+        }
+        Block::Pictures(row)
+    }
+
+    fn section<T: Serialize>(
+        &mut self,
+        name: &str,
+        data: Option<&T>,
+        markdown: &str,
+        section: Section,
+    ) -> Result<Section> {
+        let dir = &self.opts.out;
+        let mut links = Vec::new();
+        if let Some(v) = data {
+            write_json(&dir.join(format!("{name}.json")), v, self.files)?;
+            links.push(format!("{name}.json"));
+        }
+        write(&dir.join(format!("{name}.md")), markdown, self.files)?;
+        links.push(format!("{name}.md"));
+        self.md.push_str(markdown);
+        self.md.push('\n');
+        Ok(Section { id: name.into(), data: links, ..section })
+    }
+}
+
+fn perf_files(r: &PerfReport, e: &mut Emit) -> Result<Section> {
+    let svg = e.opts.out.join("perf.svg");
+    super::perf::perf_plot(r, &svg)?;
+    let caption = "Render time per builder/traversal and scene: rtdiff's median with its min-max (filled) and the \
+                   reports' figure (hollow).";
+    let figure = e.figures(vec![(svg, caption.into())]);
+    e.section(
+        "perf",
+        Some(r),
+        &super::perf::perf_markdown(r),
+        Section {
+            title: "Performance".into(),
+            intro: "The reports' performance table (\"Performance Test\" in ../shared/seeds/), measured on this \
+                    machine, with the reports' published figures beside it."
+                .into(),
+            blocks: vec![Block::Table(super::perf::perf_table(r)), figure],
+            command: command("perf", e.opts),
+            ..Default::default()
+        },
+    )
+}
+
+fn convergence_files(r: &ConvergenceReport, e: &mut Emit) -> Result<Section> {
+    use super::convergence::{feature_plot, overview_plots, summary_table, sweep_table};
+    // The summary, each feature's plot (rtdiff and Mitsuba) with its sweep, rtdiff's features
+    // together, then the pictures.
+    let mut blocks = vec![Block::Table(summary_table(r))];
+    for c in &r.curves {
+        let plot = feature_plot(r, c, &e.opts.out)?;
+        blocks.push(e.figures(vec![plot]));
+        blocks.push(Block::Table(sweep_table(c)));
+    }
+    let overview = overview_plots(r, &e.opts.out)?;
+    blocks.push(e.figures(overview));
     for c in &r.curves {
         let Some(s) = &c.images else { continue };
         let img = |f: &str| format!("images/{f}");
-        for f in [&s.render, &s.reference, &s.difference, &s.flip_map] {
-            files.push(dir.join("images").join(f));
-        }
-        let p = c.points.iter().find(|p| p.samples == s.samples);
-        pictures.push(PictureRow {
-            title: format!("{}: {} samples against the reference", c.feature_name(), s.samples),
+        let p = c.rtdiff.points.iter().find(|p| p.samples == s.samples);
+        blocks.push(e.pictures(PictureRow {
+            title: format!("{}: rtdiff at {} samples against the reference", c.feature_name(), s.samples),
             render_label: format!("rtdiff, {} samples", s.samples),
             render: img(&s.render),
-            reference_label: format!("reference: rtdiff, {} samples", r.reference_count),
+            reference_label: format!("reference: {}", c.reference.description),
             reference: img(&s.reference),
             difference: (img(&s.difference), format!("|difference|, full scale {}", fmt_num(f64::from(s.diff_scale)))),
             flip: (img(&s.flip_map), "FLIP map (LDR)".into()),
             metrics: p.map_or_else(String::new, |p| {
                 format!(
-                    "relMSE {}, mean FLIP {}, {} ms. Scene {} ({}).",
+                    "At {} samples, over {} renders (the first is shown): mean relMSE {}, mean FLIP {}, median {} \
+                     ms. Scene {} ({}).",
+                    p.samples,
+                    p.renders,
                     fmt_num(p.rel_mse),
                     fmt_num(p.flip),
                     fmt_num(p.ms),
@@ -208,72 +247,60 @@ fn convergence_files(
                     c.setup
                 )
             }),
-        });
+        }));
     }
-    Ok(Section {
-        id: "convergence".into(),
-        title: "Convergence (time against error)".into(),
-        intro: format!(
-            "Each noisy feature swept over sample counts; errors against a converged rtdiff render ({} samples, \
-             independent seed). Mitsuba: {}",
-            r.reference_count, r.mitsuba
-        ),
-        tables: super::convergence::convergence_tables(r),
-        figures,
-        pictures,
-        command: command("convergence", opts),
-        data: vec!["convergence.json".into(), "convergence.md".into()],
-    })
+    e.section(
+        "convergence",
+        Some(r),
+        &super::convergence::convergence_markdown(r),
+        Section {
+            title: "Convergence (time against error)".into(),
+            intro: "Each noisy feature swept over sample counts by rtdiff and, on the same scene exported with \
+                    `rtdiff export`, by Mitsuba 3 (the rtdiff_whitted plugin); both measured against the same \
+                    reference: reference/ (Mitsuba) where it holds the sweep's image, else a converged rtdiff \
+                    render (each plot says which)."
+                .into(),
+            blocks,
+            command: command("convergence", e.opts),
+            ..Default::default()
+        },
+    )
 }
 
-fn stability_files(
-    r: &StabilityReport,
-    opts: &ReportOptions,
-    files: &mut Vec<PathBuf>,
-    md: &mut String,
-) -> Result<Section> {
-    let dir = &opts.out;
-    let text = super::stability::stability_markdown(r);
-    write_json(&dir.join("stability.json"), r, files)?;
-    write(&dir.join("stability.md"), &text, files)?;
-    let plots = super::stability::stability_plots(r, dir)?;
-    md.push_str(&text);
-    md.push('\n');
-    let figures = plots
-        .iter()
-        .map(|p| Figure {
-            file: rel(dir, p),
-            caption: format!(
+fn stability_files(r: &StabilityReport, e: &mut Emit) -> Result<Section> {
+    let figures: Vec<(PathBuf, String)> = super::stability::stability_plots(r, &e.opts.out)?
+        .into_iter()
+        .map(|p| {
+            let caption = format!(
                 "{}: per million rays, {} / {} / {}.",
                 p.file_stem().and_then(|s| s.to_str()).unwrap_or_default(),
                 r.tracers[0],
                 r.tracers[1],
                 r.tracers[2]
-            ),
+            );
+            (p, caption)
         })
         .collect();
-    files.extend(plots);
-    Ok(Section {
-        id: "stability".into(),
-        title: "Numerical stability".into(),
-        intro: "parity's stress report on each mesh scaled and moved: leaks through shared edges and vertices, and \
-                false self-intersections of rays leaving a surface (robust offset, and the reports' fixed 1e-4)."
-            .into(),
-        tables: super::stability::stability_tables(r),
-        figures,
-        pictures: Vec::new(),
-        command: command("stability", opts),
-        data: vec!["stability.json".into(), "stability.md".into()],
-    })
+    let mut blocks: Vec<Block> = super::stability::stability_tables(r).into_iter().map(Block::Table).collect();
+    blocks.push(e.figures(figures));
+    e.section(
+        "stability",
+        Some(r),
+        &super::stability::stability_markdown(r),
+        Section {
+            title: "Numerical stability".into(),
+            intro: "parity's stress report on each mesh scaled and moved: leaks through shared edges and vertices, \
+                    and false self-intersections of rays leaving a surface (robust offset, and the reports' fixed \
+                    1e-4)."
+                .into(),
+            blocks,
+            command: command("stability", e.opts),
+            ..Default::default()
+        },
+    )
 }
 
-fn mitsuba_files(
-    r: &MitsubaReport,
-    opts: &ReportOptions,
-    files: &mut Vec<PathBuf>,
-    md: &mut String,
-) -> Result<Section> {
-    let dir = &opts.out;
+fn mitsuba_files(r: &MitsubaReport, e: &mut Emit) -> Result<Section> {
     let table = Table {
         title: format!("rtdiff against {} ({}x{})", r.mitsuba, r.size.0, r.size.1),
         header: vec![
@@ -311,63 +338,55 @@ fn mitsuba_files(
                 .into(),
         ],
     };
-    let text = format!("## Against Mitsuba 3\n\n{}", table.to_markdown());
-    write_json(&dir.join("mitsuba.json"), r, files)?;
-    write(&dir.join("mitsuba.md"), &text, files)?;
-    md.push_str(&text);
-    md.push('\n');
-    let pictures = r
-        .rows
-        .iter()
-        .map(|row| {
-            let img = |f: &str| format!("images/{f}");
-            for p in &row.pictures {
-                files.push(dir.join("images").join(p));
-            }
-            PictureRow {
-                title: format!("{} ({})", row.scene, model_name(row.model)),
-                render_label: "rtdiff".into(),
-                render: img(&row.pictures[0]),
-                reference_label: r.mitsuba.clone(),
-                reference: img(&row.pictures[1]),
-                difference: (
-                    img(&row.pictures[2]),
-                    format!("|difference|, full scale {}", fmt_num(f64::from(row.diff_scale))),
-                ),
-                flip: (img(&row.pictures[3]), "FLIP map (LDR)".into()),
-                metrics: format!(
-                    "relMSE {}, mean FLIP {}, {:.3}% of pixels over 1e-3 relative.",
-                    fmt_num(row.rel_mse),
-                    fmt_num(row.flip),
-                    100.0 * row.over_rel_threshold_fraction
-                ),
-            }
-        })
-        .collect();
-    Ok(Section {
-        id: "mitsuba".into(),
-        title: "Against Mitsuba 3".into(),
-        intro: "Every scene of reference/manifest.json: rtdiff | Mitsuba (hover the first picture to flip between \
-                the two) | absolute difference | FLIP map."
-            .into(),
-        tables: vec![table],
-        figures: Vec::new(),
-        pictures,
-        command: command("all", opts),
-        data: vec!["mitsuba.json".into(), "mitsuba.md".into()],
-    })
+    let mut blocks = vec![Block::Table(table.clone())];
+    for row in &r.rows {
+        let img = |f: &str| format!("images/{f}");
+        blocks.push(e.pictures(PictureRow {
+            title: format!("{} ({})", row.scene, model_name(row.model)),
+            render_label: "rtdiff".into(),
+            render: img(&row.pictures[0]),
+            reference_label: r.mitsuba.clone(),
+            reference: img(&row.pictures[1]),
+            difference: (
+                img(&row.pictures[2]),
+                format!("|difference|, full scale {}", fmt_num(f64::from(row.diff_scale))),
+            ),
+            flip: (img(&row.pictures[3]), "FLIP map (LDR)".into()),
+            metrics: format!(
+                "relMSE {}, mean FLIP {}, {:.3}% of pixels over 1e-3 relative.",
+                fmt_num(row.rel_mse),
+                fmt_num(row.flip),
+                100.0 * row.over_rel_threshold_fraction
+            ),
+        }));
+    }
+    e.section(
+        "mitsuba",
+        Some(r),
+        &format!("## Against Mitsuba 3\n\n{}", table.to_markdown()),
+        Section {
+            title: "Against Mitsuba 3".into(),
+            intro: "Every scene of reference/manifest.json: rtdiff | Mitsuba (hover the first picture to flip \
+                    between the two) | absolute difference | FLIP map."
+                .into(),
+            blocks,
+            command: command("all", e.opts),
+            ..Default::default()
+        },
+    )
 }
 
 /// The reports' BVH variants side by side as pictures of their cost: per-pixel node visits of the
 /// dragon's render for median/basic, sah/basic and sah/fast (counted by the traversals themselves,
 /// [`crate::debug::heatmap`]), on one colour scale, with the totals per ray.
-fn heatmap_files(opts: &ReportOptions, files: &mut Vec<PathBuf>, md: &mut String) -> Result<Section> {
+fn heatmap_files(e: &mut Emit) -> Result<Section> {
     use crate::backends::{AccelConfig, Builder, Traversal};
     use crate::debug::heatmap::Metric;
+    let opts = e.opts;
     let dir = &opts.out;
     let images = dir.join("images");
     std::fs::create_dir_all(&images).map_err(|e| Error::io(&images, &e))?;
-    let size = if opts.quick { 96 } else { 400 };
+    let size = if opts.quick { 160 } else { 400 };
     let scene_path = opts.root.join("scenes").join("dragon.json");
     let ov = crate::scene::Overrides { width: Some(size), height: Some(size), ..Default::default() };
     let scene = crate::scene::Scene::load_with(&scene_path, &ov)?;
@@ -389,16 +408,15 @@ fn heatmap_files(opts: &ReportOptions, files: &mut Vec<PathBuf>, md: &mut String
         let name = format!("heatmap-dragon-{}.png", label.replace('/', "-"));
         let path = images.join(&name);
         h.write_png(Metric::Nodes, Some(scale), &path)?;
-        files.push(path);
         let per_ray = |v: u64| v as f64 / h.totals.rays.max(1) as f64;
-        figures.push(Figure {
-            file: format!("images/{name}"),
-            caption: format!(
+        figures.push((
+            path,
+            format!(
                 "{label}: {} node visits per ray{} (scale 0 to {scale})",
                 fmt_num(per_ray(h.totals.nodes)),
                 if h.wide { " (8-wide nodes)" } else { "" }
             ),
-        });
+        ));
         rows.push(vec![
             label.clone(),
             h.totals.rays.to_string(),
@@ -412,25 +430,26 @@ fn heatmap_files(opts: &ReportOptions, files: &mut Vec<PathBuf>, md: &mut String
         rows,
         notes: vec!["`fast` counts 8-wide nodes: one visit tests up to eight boxes.".into()],
     };
-    let text = format!("## Heatmaps\n\n{}", table.to_markdown());
-    write(&dir.join("heatmaps.md"), &text, files)?;
-    md.push_str(&text);
-    md.push('\n');
-    Ok(Section {
-        id: "heatmaps".into(),
-        title: "BVH variants as pictures of their cost".into(),
-        intro: "Per-pixel node visits of the dragon's render, counted by the traversal code itself, one colour \
-                scale for all three."
-            .into(),
-        tables: vec![table],
-        figures,
-        pictures: Vec::new(),
-        command: format!(
-            "{} (one picture: rtdiff debug scenes/dragon.json --heatmap nodes --builder sah --traversal fast -o h.png)",
-            command("all", opts)
-        ),
-        data: vec!["heatmaps.md".into()],
-    })
+    let markdown = format!("## Heatmaps\n\n{}", table.to_markdown());
+    let blocks = vec![Block::Table(table), e.figures(figures)];
+    e.section(
+        "heatmaps",
+        None::<&()>,
+        &markdown,
+        Section {
+            title: "BVH variants as pictures of their cost".into(),
+            intro: "Per-pixel node visits of the dragon's render, counted by the traversal code itself, one colour \
+                    scale for all three."
+                .into(),
+            blocks,
+            command: format!(
+                "{} (one picture: rtdiff debug scenes/dragon.json --heatmap nodes --builder sah --traversal fast -o \
+                 h.png)",
+                command("all", opts)
+            ),
+            ..Default::default()
+        },
+    )
 }
 
 fn model_name(m: crate::shading::ShadingModelKind) -> &'static str {

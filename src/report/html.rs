@@ -33,6 +33,17 @@ pub struct PictureRow {
     pub metrics: String,
 }
 
+/// One piece of a section, in page order; each is followed by the command that regenerates it.
+#[derive(Clone, Debug)]
+pub enum Block {
+    /// A table.
+    Table(Table),
+    /// Plots or pictures side by side (wrapping to the page width).
+    Figures(Vec<Figure>),
+    /// A row of pictures: render (flips to the reference on hover), reference, difference, FLIP map.
+    Pictures(PictureRow),
+}
+
 /// A section of the page.
 #[derive(Clone, Debug, Default)]
 pub struct Section {
@@ -42,12 +53,8 @@ pub struct Section {
     pub title: String,
     /// Introductory text.
     pub intro: String,
-    /// Tables.
-    pub tables: Vec<Table>,
-    /// Plots.
-    pub figures: Vec<Figure>,
-    /// Side-by-side pictures.
-    pub pictures: Vec<PictureRow>,
+    /// Tables, figures and picture rows, in page order.
+    pub blocks: Vec<Block>,
     /// The command that regenerates this section.
     pub command: String,
     /// The JSON and Markdown files of the section (relative paths).
@@ -63,8 +70,10 @@ p.note{font-size:12px;color:#555;max-width:1100px}\
 figure{margin:16px 0}figure img{max-width:100%;border:1px solid #ddd}\
 code{background:#f4f4f4;padding:2px 5px}\
 .cmd{font-size:12px;color:#333}\
+.figs{display:flex;gap:16px;align-items:flex-start;flex-wrap:wrap}.figs figure{margin:8px 0;width:min-content}.figs img{max-width:none}\
 .pics{display:flex;gap:10px;align-items:flex-start;flex-wrap:wrap}\
-.pics figure{margin:0}.pics img{width:256px;image-rendering:pixelated}\
+.pics figure{margin:0;width:256px}.pics figcaption{font-size:13px}\
+.pics img{width:256px;image-rendering:pixelated}\
 .flip img.b{display:none}.flip:hover img.a{display:none}.flip:hover img.b{display:inline}\
 nav a{margin-right:14px}";
 
@@ -103,42 +112,51 @@ fn section(s: &Section) -> String {
         o.push_str(&links.join(", "));
         o.push_str("</p>\n");
     }
-    for t in &s.tables {
-        o.push_str(&t.to_html());
-        o.push_str(&command(&s.command));
-    }
-    for f in &s.figures {
-        o.push_str(&format!(
-            "<figure><img src=\"{}\" alt=\"{}\"><figcaption>{}</figcaption></figure>\n",
-            escape_html(&f.file),
-            escape_html(&f.caption),
-            escape_html(&f.caption)
-        ));
-        o.push_str(&command(&s.command));
-    }
-    for p in &s.pictures {
-        o.push_str(&format!("<h3>{}</h3>\n<div class=\"pics\">\n", escape_html(&p.title)));
-        o.push_str(&format!(
-            "<figure class=\"flip\"><img class=\"a\" src=\"{r}\" alt=\"{rl}\"><img class=\"b\" src=\"{f}\" alt=\"{fl}\">\
-             <figcaption>{rl} (hover: {fl})</figcaption></figure>\n",
-            r = escape_html(&p.render),
-            rl = escape_html(&p.render_label),
-            f = escape_html(&p.reference),
-            fl = escape_html(&p.reference_label)
-        ));
-        for (file, cap) in
-            [(&p.reference, &p.reference_label), (&p.difference.0, &p.difference.1), (&p.flip.0, &p.flip.1)]
-        {
-            o.push_str(&format!(
-                "<figure><img src=\"{}\" alt=\"{c}\"><figcaption>{c}</figcaption></figure>\n",
-                escape_html(file),
-                c = escape_html(cap)
-            ));
+    for b in &s.blocks {
+        match b {
+            Block::Table(t) => {
+                o.push_str(&t.to_html());
+                o.push_str(&command(&s.command));
+            }
+            Block::Figures(fs) => {
+                o.push_str("<div class=\"figs\">\n");
+                for f in fs {
+                    o.push_str(&format!(
+                        "<figure><img src=\"{}\" alt=\"{c}\"><figcaption>{c}</figcaption>{}</figure>\n",
+                        escape_html(&f.file),
+                        command(&s.command),
+                        c = escape_html(&f.caption)
+                    ));
+                }
+                o.push_str("</div>\n");
+            }
+            Block::Pictures(p) => o.push_str(&pictures(p, &s.command)),
         }
-        o.push_str(&format!("</div>\n<p class=\"note\">{}</p>\n", escape_html(&p.metrics)));
-        o.push_str(&command(&s.command));
     }
     o.push_str("</section>\n");
+    o
+}
+
+fn pictures(p: &PictureRow, cmd: &str) -> String {
+    let mut o = format!("<h3>{}</h3>\n<div class=\"pics\">\n", escape_html(&p.title));
+    o.push_str(&format!(
+        "<figure class=\"flip\"><img class=\"a\" src=\"{r}\" alt=\"{rl}\"><img class=\"b\" src=\"{f}\" alt=\"{fl}\">\
+         <figcaption>{rl} (hover: {fl})</figcaption></figure>\n",
+        r = escape_html(&p.render),
+        rl = escape_html(&p.render_label),
+        f = escape_html(&p.reference),
+        fl = escape_html(&p.reference_label)
+    ));
+    for (file, cap) in [(&p.reference, &p.reference_label), (&p.difference.0, &p.difference.1), (&p.flip.0, &p.flip.1)]
+    {
+        o.push_str(&format!(
+            "<figure><img src=\"{}\" alt=\"{c}\"><figcaption>{c}</figcaption></figure>\n",
+            escape_html(file),
+            c = escape_html(cap)
+        ));
+    }
+    o.push_str(&format!("</div>\n<p class=\"note\">{}</p>\n", escape_html(&p.metrics)));
+    o.push_str(&command(cmd));
     o
 }
 

@@ -111,7 +111,13 @@ pub fn stability_plots(r: &StabilityReport, dir: &Path) -> Result<Vec<PathBuf>> 
                 if points.is_empty() {
                     continue;
                 }
-                ls.push(Line { name: format!("{scene}: {}", r.tracers[k]), points, color: si * 3 + k, dashed: false });
+                ls.push(Line {
+                    name: format!("{scene}: {}", r.tracers[k]),
+                    points,
+                    color: si * 3 + k,
+                    dashed: false,
+                    spread: Vec::new(),
+                });
             }
         }
         if ls.is_empty() {

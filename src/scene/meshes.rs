@@ -68,6 +68,8 @@ pub(crate) fn load_meshes(
             out.warnings.extend(file_mesh.warnings.iter().cloned());
         }
         out.degenerate_skipped += file_mesh.degenerate_skipped;
+        let what = format!("meshes[{mi}] ({})", spec.file);
+        validate::check_primitive_total(path, &what, out.triangles.len(), file_mesh.indices.len())?;
         let mut mesh = Mesh::clone(&file_mesh);
         place_mesh(&mut mesh, spec);
         validate::check_mesh_bounds(path, &format!("meshes[{mi}]"), &spec.file, &mesh.positions)?;
@@ -133,16 +135,35 @@ fn place_mesh(mesh: &mut Mesh, spec: &MeshSpec) {
         let rot = Mat3::from_rotation_z(r.z) * Mat3::from_rotation_y(r.y) * Mat3::from_rotation_x(r.x);
         let linear = rot * Mat3::from_diagonal(t.scale);
         mesh.map_positions(|p| linear * p + t.translate);
-        let normal_matrix = linear.inverse().transpose();
-        for n in &mut mesh.normals {
-            *n = (normal_matrix * *n).normalize_or_zero();
-        }
-        if linear.determinant() < 0.0 {
+        transform_normals(&mut mesh.normals, linear);
+        if linear.as_dmat3().determinant() < 0.0 {
             // A mirroring transform flips the winding: keep geometric normals consistent with shading normals.
             for t in &mut mesh.indices {
                 t.swap(1, 2);
             }
         }
+    }
+}
+
+/// Transform unit normals by the inverse transpose of `linear`. Where that
+/// overflows in f32 (the determinant of scales like 1e-19 underflows, a zero
+/// scale has none), the cofactor matrix in f64 gives the same directions
+/// (`inverse^T = cofactor / det`; the sign of the determinant kept), with a
+/// zero scale flattening the normals onto that axis.
+fn transform_normals(normals: &mut [glam::Vec3], linear: Mat3) {
+    let normal_matrix = linear.inverse().transpose();
+    if normal_matrix.is_finite() {
+        for n in normals {
+            *n = crate::geometry::unit_or_zero(normal_matrix * *n);
+        }
+        return;
+    }
+    let l = linear.as_dmat3();
+    let (a, b, c) = (l.x_axis, l.y_axis, l.z_axis);
+    let sign = if l.determinant() < 0.0 { -1.0 } else { 1.0 };
+    let cofactor = glam::DMat3::from_cols(b.cross(c), c.cross(a), a.cross(b)) * sign;
+    for n in normals {
+        *n = (cofactor * n.as_dvec3()).normalize_or_zero().as_vec3();
     }
 }
 

@@ -121,6 +121,7 @@ impl Scene {
         let mut materials = materials::MaterialTable::from_file(file, dir, path)?;
         let meshes = meshes::load_meshes(&file.meshes, dir, path, &mut materials)?;
         let (spheres, sphere_materials) = spheres(file, &materials)?;
+        validate::check_primitive_total(path, "spheres", meshes.triangles.len(), spheres.len())?;
         let img = &file.image;
         Ok(Self {
             path: path.to_path_buf(),

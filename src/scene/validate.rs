@@ -200,6 +200,18 @@ pub fn check_file(file: &SceneFile, path: &Path) -> Result<()> {
     for (i, s) in file.spheres.iter().enumerate() {
         c.point(&format!("spheres[{i}].center"), s.center)?;
         c.number(&format!("spheres[{i}].radius"), s.radius, f32::MIN_POSITIVE, MAX_COORDINATE)?;
+        let extent = s.center.abs().max_element();
+        let min = extent * limits::MIN_SPHERE_RADIUS_RELATIVE;
+        if s.radius < min {
+            return Err(c.err(
+                &format!("spheres[{i}].radius"),
+                format!(
+                    "{} is below the limit of 2^-20 times the centre's largest coordinate {extent} ({min:e}): \
+                     so small a sphere so far from the origin cannot be told from its centre in single precision",
+                    s.radius
+                ),
+            ));
+        }
     }
     for (i, l) in file.lights.iter().enumerate() {
         c.light(i, l)?;
@@ -354,6 +366,23 @@ pub fn check_mesh_bounds(path: &Path, field: &str, file: &str, positions: &[Vec3
                 p.x,
                 p.y,
                 p.z
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Refuse adding `what` (`meshes[3] (a.obj)`, `spheres`) with `adding`
+/// primitives to a scene that already has `before` when the total would pass
+/// [`limits::MAX_PRIMITIVES`]; called before they are copied into the scene.
+pub fn check_primitive_total(path: &Path, what: &str, before: usize, adding: usize) -> Result<()> {
+    let total = before.saturating_add(adding);
+    if total > limits::MAX_PRIMITIVES {
+        return Err(Error::file(
+            path,
+            format!(
+                "{what}: its {adding} primitives bring the scene to {total}, over the limit of {} primitives",
+                limits::MAX_PRIMITIVES
             ),
         ));
     }

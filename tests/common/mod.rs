@@ -228,17 +228,24 @@ pub fn icosphere(levels: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
     (pos, faces)
 }
 
-/// The Python of `.venv/` (made by `scripts/mitsuba/setup.sh`), or `None` with a note on stderr
-/// naming `test` when it is missing; with `RTDIFF_REQUIRE_PYTHON=1` (set by `scripts/test.sh`)
-/// a missing environment fails instead of skipping.
+/// The Python of `.venv/` (made by `scripts/mitsuba/setup.sh`, found by
+/// [`rtdiff::perf::mitsuba_python::venv_python`]), or `None` with a note on stderr naming `test`
+/// when it is missing; with `RTDIFF_REQUIRE_PYTHON=1` (set by `scripts/test.sh`) a missing
+/// environment fails instead of skipping.
 pub fn venv_python(test: &str) -> Option<PathBuf> {
-    let py = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python");
-    if py.exists() {
+    let root = root();
+    if let Some(py) = rtdiff::perf::mitsuba_python::venv_python(&root) {
         return Some(py);
     }
-    if std::env::var("RTDIFF_REQUIRE_PYTHON").is_ok_and(|v| v == "1") {
-        panic!("RTDIFF_REQUIRE_PYTHON=1 but {} is missing: run scripts/mitsuba/setup.sh", py.display());
+    let why = rtdiff::perf::mitsuba_python::missing_environment(&root).unwrap_or_default();
+    if python_required() {
+        panic!("RTDIFF_REQUIRE_PYTHON=1 but {why}");
     }
-    eprintln!("{test}: skipped, {} is missing (run scripts/mitsuba/setup.sh)", py.display());
+    eprintln!("{test}: skipped, {why}");
     None
+}
+
+/// True when `RTDIFF_REQUIRE_PYTHON=1` (set by `scripts/test.sh`): Python-backed checks must run.
+pub fn python_required() -> bool {
+    std::env::var("RTDIFF_REQUIRE_PYTHON").is_ok_and(|v| v == "1")
 }

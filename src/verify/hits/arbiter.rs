@@ -21,41 +21,60 @@
 //!   compared by squaring. The nearest root inside `[t_min, t_max]` is the hit,
 //!   as in [`crate::geometry::Sphere::intersect`].
 //!
-//! The interval is closed. Every primitive whose exact distance is minimal is
-//! part of the answer (exact ties).
+//! The interval is closed. The *answer* of a ray is the set of primitives it
+//! hits at the smallest exact distance (empty: a miss); distances are ordered
+//! exactly, the rational `t`s by cross-multiplication, sphere roots by
+//! squaring ([`ExactT::cmp_exact`]), however close they are. Two primitives
+//! with the same vertices (or the same centre and radius) are the same
+//! surface and always tie.
 //!
-//! # Classification
+//! # Ill-conditioned rays, precisely
 //!
-//! A single-precision tracer cannot be asked for the exact answer when the
-//! answer changes under perturbations of the size of its rounding. The unit of
-//! that size is the module bound of the parity harness with `K = 1`: the hit
-//! point may move by `u (|o|_inf + |p|_inf) / c` along the ray (`u = 2^-24`,
-//! `c` the cosine between ray and surface normal), i.e. `t` by
-//! `tb = u (|o| + |p|) / (c |d|)` and a barycentric by
-//! `bb = u (|o| + |p|) L / (|N| c) + u` (`L` longest edge, `|N|` twice the
-//! area). One unit is what rounding the ray's float32 inputs once does;
-//! [`K_TRACER`] units (32, the parity harness's `K`) is what a correct float32
-//! tracer may accumulate. The *conditioning margin* of a ray, in these units,
-//! is the smallest perturbation that changes its exact answer:
+//! The answer is fixed by the signs of a few exact quantities, its
+//! *decisions*: for every primitive near the ray, the three edge volumes
+//! (for a sphere, the discriminant `b^2 - a c`), `t - t_min` and `t_max - t`;
+//! and for every pair of hit primitives, `t_1 - t_2`. A *one-unit
+//! perturbation* moves every float32 input `x` to `x (1 + delta)`,
+//! `|delta| <= u = 2^-24`, independently, and every distance a tracer
+//! compares (`t` against `t_min`, `t_max` or another `t`) by one rounding to
+//! float32 as well. To first order it moves a decision `q` by at most
+//! `u kappa(q)`, with `kappa(q) = sum_i |dq/dx_i| |x_i|` over the inputs
+//! (plus `|t|` for each distance compared; [`super::condition`]). The
+//! decision's margin is `q / (u kappa(q))`, the number of such
+//! perturbations it takes to change its sign, signed `+` on the side of the
+//! exact answer (0 when `q` is exactly 0).
 //!
-//! - the closest hit's smallest barycentric over `bb` (how far inside its
-//!   triangle; for a sphere the half chord over `tb`),
-//! - its distance to `t_min` and to `t_max` over `tb` (at `t_min`, over the
-//!   larger of `tb` and twice the watertight test's own error bound on `t`,
-//!   pbrt-v4 6.8.7, below which that test refuses a hit by design),
-//! - for every other primitive, how far it is from being hit in front of the
-//!   answer: the larger of `-min barycentric / bb` and `(t - t*) / tb` (with
-//!   the larger of the two primitives' `tb`: two computed distances can come
-//!   out in either order when they differ by less than either's error).
+//! The ray's **conditioning margin** is the smallest number of units of
+//! perturbation that can change the answer, to first order and decision by
+//! decision: the smallest of
+//!
+//! - for each primitive of the answer, its margin to being missed (smallest of
+//!   its edge-volume, `t - t_min` and `t_max - t` margins), and its distance
+//!   margin to each other primitive of the answer (0 for an exact tie between
+//!   different surfaces);
+//! - for every other primitive near the ray, the margin it takes to enter the
+//!   answer: the largest of its violated decisions' margins (edge volumes of
+//!   the wrong sign, a distance outside the interval), and, if its exact
+//!   distance lies behind the answer's, its distance margin to the nearer of
+//!   the answer's primitives.
+//!
+//! A ray is **ill-conditioned** when its margin is at most 1: some decision
+//! of its answer can flip under a one-unit perturbation of the inputs, so the
+//! answer is decided by the last bit of the inputs and no float32 tracer can
+//! be held to it. A ray with a margin above 1 is well-conditioned: no
+//! one-unit perturbation changes its answer (to first order), and a tracer
+//! that does not return it is not exact.
 //!
 //! A tracer's answer is [`Verdict::Exact`] when it is one of the exact
-//! answer's primitives (or both miss); [`Verdict::WithinBound`] when it is
-//! not, but the primitive it returned is reachable and everything it skipped
-//! is missable within `K_TRACER` units; [`Verdict::Wrong`] otherwise. A ray is
-//! **ill-conditioned** when its margin is at most one unit: its answer is
-//! decided by the last bit of the inputs, and no single-precision tracer can
-//! be held to it.
+//! answer's primitives (or both miss). Otherwise the arbiter counts the units
+//! it takes to produce that answer: for the returned primitive its margin to
+//! enter (all its violated decisions), and for every primitive hit exactly no
+//! farther than it, the smaller of its margin to be missed and its distance
+//! margin to the returned one. [`Verdict::WithinBound`] when that takes at
+//! most [`K_TRACER`] units (what a correct float32 tracer may accumulate),
+//! [`Verdict::Wrong`] beyond.
 
+use std::cmp::Ordering;
 use std::sync::Arc;
 
 use glam::DVec3;
@@ -63,6 +82,7 @@ use num_bigint::BigInt;
 use num_traits::{Signed, Zero};
 use serde::Serialize;
 
+use super::condition::{self, Sensitivity, U, units};
 use super::exact::{self, BigVec, ExactT, fixed, fixed3};
 use super::line_index::LineIndex;
 use crate::geometry::{Prim, Primitives, Ray};
@@ -70,7 +90,6 @@ use crate::geometry::{Prim, Primitives, Ray};
 /// Units of rounding a correct float32 tracer may accumulate (the parity
 /// harness's `K`, `hits::bounds` / module docs of the parity harness).
 pub const K_TRACER: f64 = 32.0;
-const U: f64 = f32::EPSILON as f64 * 0.5;
 
 /// One primitive evaluated exactly against a ray's line.
 #[derive(Clone, Debug)]
@@ -78,8 +97,8 @@ pub struct Exact {
     /// Global primitive id.
     pub prim: u32,
     /// Exact distance where the line meets the triangle's plane, or the
-    /// sphere's root nearest the interval; `None` when the line is parallel to
-    /// the plane or misses the sphere.
+    /// sphere's root nearest the interval (its closest approach when the line
+    /// misses); `None` when the line is parallel to the plane.
     pub t: Option<ExactT>,
     /// `t` rounded to `f64` (NaN when `t` is `None`).
     pub t_f64: f64,
@@ -89,22 +108,28 @@ pub struct Exact {
     /// (triangles); for spheres the signed half chord `sqrt(b^2 - a c) / a`
     /// in the first slot (negative: the line misses by that much).
     pub bary: [f64; 3],
-    /// Unit `t` bound `tb` at this point (module docs).
-    pub tb: f64,
-    /// Unit barycentric bound `bb` (triangles; infinite for spheres).
-    pub bb: f64,
+    /// Signed margin, in units (module docs), of the line passing inside the
+    /// primitive: the smallest edge-volume margin of a triangle (negative
+    /// outside), the discriminant's for a sphere.
+    pub inside: f64,
+    /// Signed margin of `t >= t_min`.
+    pub lo: f64,
+    /// Signed margin of `t <= t_max`.
+    pub hi: f64,
+    /// Gradient of `t` over the inputs (`None` without a distance).
+    pub dt: Option<Sensitivity>,
 }
 
 impl Exact {
-    /// How far inside the primitive the line passes, in units of its bound
-    /// (negative outside): smallest barycentric over `bb`, or the half chord
-    /// over `tb` for a sphere.
-    pub fn inside_margin(&self, is_triangle: bool) -> f64 {
-        if is_triangle {
-            self.bary.iter().copied().fold(f64::INFINITY, f64::min) / self.bb
-        } else {
-            self.bary[0] / self.tb
-        }
+    /// Units it takes to miss this primitive (0 when it is not hit).
+    pub fn miss_units(&self) -> f64 {
+        self.inside.min(self.lo).min(self.hi).max(0.0)
+    }
+
+    /// Units it takes to hit this primitive somewhere in the interval (0 when
+    /// it is hit): the largest margin among its violated decisions.
+    pub fn enter_units(&self) -> f64 {
+        (-self.inside).max(-self.lo).max(-self.hi).max(0.0)
     }
 }
 
@@ -118,7 +143,7 @@ pub struct Truth {
     /// Every primitive the exact evaluation looked at (all that the line hits
     /// or nearly hits in the interval).
     pub candidates: Vec<Exact>,
-    /// Conditioning margin in units of the rounding bound (module docs).
+    /// Conditioning margin in units of one rounding (module docs).
     pub margin: f64,
 }
 
@@ -238,7 +263,12 @@ impl Arbiter {
         &self.prims
     }
 
-    /// Unit bounds `(tb, bb)` (module docs) at parameter `t` on primitive `prim`.
+    /// The parity harness's per-ray bounds ([`super::bounds`]) with `K = 1`,
+    /// `(tb, bb)` at parameter `t` on primitive `prim`: the hit point may move
+    /// by `u (|o|_inf + |p|_inf) / c` along the ray (`c` the cosine between
+    /// ray and normal), i.e. `t` by `tb = u (|o| + |p|) / (c |d|)` and a
+    /// barycentric by `bb = u (|o| + |p|) L / (|N| c) + u` (`L` longest edge,
+    /// `|N|` twice the area). The candidate search measures "near" in these.
     pub fn unit_bounds(&self, ray: &Ray, prim: u32, t: f64) -> (f64, f64) {
         let o = ray.origin.as_dvec3();
         let d = ray.dir.as_dvec3();
@@ -257,34 +287,83 @@ impl Arbiter {
         (plane / dl, plane * bb_geom + U)
     }
 
-    /// Exact evaluation of triangle `i` (or `None` when the line is parallel
-    /// to its plane or the triangle has zero area).
+    /// Signed margins of `t - t_min` and `t_max - t` (module docs): the
+    /// inputs through `dt`, `t_min` or `t_max` themselves, and one rounding
+    /// of the computed `t`.
+    fn interval_units(ray: &Ray, t: &ExactT, t_f64: f64, dt: &Sensitivity) -> (f64, f64) {
+        let k = dt.kappa(ray.origin.as_dvec3(), ray.dir.as_dvec3()) + t_f64.abs();
+        let side = |x: f32, sign_if_inside: i32| {
+            if x.is_infinite() {
+                return f64::INFINITY;
+            }
+            let s = match t.cmp_f32(x) {
+                Ordering::Less => -1,
+                Ordering::Equal => 0,
+                Ordering::Greater => 1,
+            };
+            units(s * sign_if_inside, (t_f64 - x as f64).abs(), k + (x as f64).abs())
+        };
+        (side(ray.t_min, 1), side(ray.t_max, -1))
+    }
+
+    /// Exact evaluation of triangle `i`.
     fn exact_triangle(&self, ray: &Ray, i: usize, o: &BigVec, d: &BigVec) -> Exact {
-        let [v0, v1, v2] = self.prims.triangles[i].v;
-        let a = exact::sub(&fixed3(v0), o);
-        let b = exact::sub(&fixed3(v1), o);
-        let c = exact::sub(&fixed3(v2), o);
+        let v = self.prims.triangles[i].v;
+        let a = exact::sub(&fixed3(v[0]), o);
+        let b = exact::sub(&fixed3(v[1]), o);
+        let c = exact::sub(&fixed3(v[2]), o);
         let bc = exact::cross(&b, &c);
         let w = [exact::dot(d, &bc), exact::dot(d, &exact::cross(&c, &a)), exact::dot(d, &exact::cross(&a, &b))];
         let sum: BigInt = &w[0] + &w[1] + &w[2];
+        let det = exact::dot(&a, &bc);
+        let (od, dd) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
         if sum.is_zero() {
+            // The line is parallel to the plane (or the triangle has zero
+            // area): never hit. It can enter under a perturbation only when it
+            // lies in the plane (det = 0) and meets the closed triangle there,
+            // i.e. its three vertices are not strictly on one side of it
+            // (side of v: sign of N.(d x (v - o)), N the exact normal).
+            let n = exact::cross(&exact::sub(&b, &a), &exact::sub(&c, &a));
+            let dn = exact::cross(d, &n);
+            let sides = [&a, &b, &c].map(|p| exact::sign(&exact::dot(&dn, p)));
+            let apart = sides.iter().all(|&s| s > 0) || sides.iter().all(|&s| s < 0);
+            let in_plane = det.is_zero() && n.iter().any(|x| !x.is_zero()) && !apart;
             return Exact {
                 prim: i as u32,
                 t: None,
                 t_f64: f64::NAN,
                 hit: false,
                 bary: [f64::NAN; 3],
-                tb: f64::INFINITY,
-                bb: f64::INFINITY,
+                inside: if in_plane { 0.0 } else { f64::NEG_INFINITY },
+                lo: f64::INFINITY,
+                hi: f64::INFINITY,
+                dt: None,
             };
         }
-        let t = ExactT::rational(exact::dot(&a, &bc), sum.clone());
-        let inside = w.iter().all(|x| !x.is_negative()) || w.iter().all(|x| !x.is_positive());
-        let in_range = t.cmp_f32(ray.t_min).is_ge() && t.cmp_f32(ray.t_max).is_le();
+        let t = ExactT::rational(det, sum.clone());
+        let hit_side = exact::sign(&sum);
+        let inside_edges = [(1, 2), (2, 0), (0, 1)].iter().zip(&w).fold(f64::INFINITY, |m, (&(p, q), wk)| {
+            let k = condition::edge_volume_kappa(od, dd, v[p], v[q]);
+            m.min(units(exact::sign(wk) * hit_side, exact::scaled_f64(wk, 3).abs(), k))
+        });
         let bary = [0, 1, 2].map(|k| exact::ratio_f64(&w[k], &sum));
         let t_f64 = t.to_f64();
-        let (tb, bb) = self.unit_bounds(ray, i as u32, t_f64);
-        Exact { prim: i as u32, t: Some(t), t_f64, hit: inside && in_range, bary, tb, bb }
+        let s = exact::scaled_f64(&sum, 3);
+        let dt = Sensitivity::triangle(&v, self.pre[i].n, s, t_f64, bary);
+        let (lo, hi) = Self::interval_units(ray, &t, t_f64, &dt);
+        let inside = w.iter().all(|x| !x.is_negative()) || w.iter().all(|x| !x.is_positive());
+        let in_range = t.cmp_f32(ray.t_min).is_ge() && t.cmp_f32(ray.t_max).is_le();
+        Exact {
+            prim: i as u32,
+            t: Some(t),
+            t_f64,
+            hit: inside && in_range,
+            bary,
+            inside: inside_edges,
+            lo,
+            hi,
+            dt: Some(dt),
+        }
     }
 
     /// Exact evaluation of sphere `j` (global id `nt + j`).
@@ -297,34 +376,47 @@ impl Arbiter {
         let r = fixed(s.radius);
         let c = exact::dot(&f, &f) - &r * &r;
         let disc: BigInt = &b * &b - &a * &c;
+        let (od, dd) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+        let inside = units(
+            exact::sign(&disc),
+            exact::scaled_f64(&disc, 4).abs(),
+            condition::sphere_disc_kappa(od, dd, s.center, s.radius),
+        );
+        let root_disc = exact::scaled_f64(&disc.abs().sqrt(), 2);
         let half_chord = {
             let h = exact::ratio_f64(&disc.abs().sqrt(), &a);
             if disc.is_negative() { -h } else { h }
         };
-        let miss = |t: Option<ExactT>| {
-            let t_f64 = t.as_ref().map_or(f64::NAN, |t| t.to_f64());
-            let (tb, _) = if t_f64.is_finite() { self.unit_bounds(ray, prim, t_f64) } else { (f64::INFINITY, 0.0) };
-            Exact { prim, t, t_f64, hit: false, bary: [half_chord, f64::NAN, f64::NAN], tb, bb: f64::INFINITY }
+        let base = |t: ExactT, sign: i32, hit: bool| {
+            let t_f64 = t.to_f64();
+            // g = o + t d - centre has g.d = a t - b = sign sqrt(disc) at the root (b -+ sqrt disc) / a.
+            let (lo, hi, dt) = if disc.is_negative() {
+                (f64::INFINITY, f64::INFINITY, None)
+            } else {
+                let g = od + t_f64 * dd - s.center.as_dvec3();
+                let dt = Sensitivity::sphere(prim, s.center, s.radius, t_f64, g, sign as f64 * root_disc);
+                let (lo, hi) = Self::interval_units(ray, &t, t_f64, &dt);
+                (lo, hi, Some(dt))
+            };
+            Exact { prim, t: Some(t), t_f64, hit, bary: [half_chord, f64::NAN, f64::NAN], inside, lo, hi, dt }
         };
         if disc.is_negative() {
             // The line misses: report the closest approach's parameter b / a.
-            return miss(Some(ExactT::rational(b, a)));
+            return base(ExactT::rational(b, a), 0, false);
         }
         let root = |sgn: i64| ExactT { p: b.clone(), q: BigInt::from(sgn), d: disc.clone(), m: a.clone() };
         let in_range = |t: &ExactT| t.cmp_f32(ray.t_min).is_ge() && t.cmp_f32(ray.t_max).is_le();
         let (t0, t1) = (root(-1), root(1));
-        let chosen = if in_range(&t0) {
-            t0
+        if in_range(&t0) {
+            base(t0, -1, true)
         } else if in_range(&t1) {
-            t1
-        } else {
+            base(t1, 1, true)
+        } else if t1.cmp_f32(ray.t_min).is_lt() {
             // Neither root inside: the nearer root to the interval.
-            let near = if t1.cmp_f32(ray.t_min).is_lt() { t1 } else { t0 };
-            return miss(Some(near));
-        };
-        let t_f64 = chosen.to_f64();
-        let (tb, bb) = self.unit_bounds(ray, prim, t_f64);
-        Exact { prim, t: Some(chosen), t_f64, hit: true, bary: [half_chord, f64::NAN, f64::NAN], tb, bb }
+            base(t1, 1, false)
+        } else {
+            base(t0, -1, false)
+        }
     }
 
     /// True when triangle `i` could be hit or nearly hit (within
@@ -367,8 +459,6 @@ impl Arbiter {
 
     /// The exact closest hit of `ray`, with its conditioning margin.
     pub fn truth(&self, ray: &Ray) -> Truth {
-        let o = fixed3(ray.origin);
-        let d = fixed3(ray.dir);
         // Candidates: triangles whose box comes within the slack of the line.
         // A triangle the line meets is always found (any slack >= 0 keeps it;
         // this one also absorbs the index's own double rounding). The slack
@@ -387,19 +477,27 @@ impl Arbiter {
             }
         });
         near.sort_unstable();
-        let mut candidates: Vec<Exact> = near.into_iter().map(|i| self.exact_triangle(ray, i, &o, &d)).collect();
+        self.truth_over(ray, &near)
+    }
+
+    /// The exact closest hit of `ray` over the triangles `tris` (and every
+    /// sphere), with its conditioning margin.
+    fn truth_over(&self, ray: &Ray, tris: &[usize]) -> Truth {
+        let o = fixed3(ray.origin);
+        let d = fixed3(ray.dir);
+        let mut candidates: Vec<Exact> = tris.iter().map(|&i| self.exact_triangle(ray, i, &o, &d)).collect();
         candidates.extend((0..self.prims.spheres.len()).map(|j| self.exact_sphere(ray, j, &o, &d)));
         let mut best: Option<ExactT> = None;
         let mut prims = Vec::new();
         for e in candidates.iter().filter(|e| e.hit) {
             let t = e.t.as_ref().expect("a hit has a distance");
             match best.as_ref().map(|b| t.cmp_exact(b)) {
-                None | Some(std::cmp::Ordering::Less) => {
+                None | Some(Ordering::Less) => {
                     best = Some(t.clone());
                     prims = vec![e.prim];
                 }
-                Some(std::cmp::Ordering::Equal) => prims.push(e.prim),
-                Some(std::cmp::Ordering::Greater) => {}
+                Some(Ordering::Equal) => prims.push(e.prim),
+                Some(Ordering::Greater) => {}
             }
         }
         prims.sort_unstable();
@@ -408,60 +506,68 @@ impl Arbiter {
         truth
     }
 
-    fn is_triangle(&self, prim: u32) -> bool {
-        self.prims.sphere_index(prim as usize).is_none()
-    }
-
-    /// The watertight test's own bound on `t` near the origin (twice its
-    /// error bound; it refuses computed distances below one bound).
-    fn t_min_bound(&self, ray: &Ray, e: &Exact) -> f64 {
-        let tb = e.tb;
-        if !self.is_triangle(e.prim) {
-            return tb;
+    /// True when primitives `p` and `q` are the same surface: triangles with
+    /// the same three vertices (in any order or winding), or spheres with the
+    /// same centre and radius. They tie at every ray, under every
+    /// perturbation.
+    fn identical(&self, p: u32, q: u32) -> bool {
+        if p == q {
+            return true;
         }
-        let [a, b, c] = self.prims.triangles[e.prim as usize].v;
-        let wt = crate::geometry::triangle::watertight_t_error_for(ray, a, b, c).map_or(0.0, |x| 2.0 * x as f64);
-        tb.max(wt / K_TRACER)
+        match (self.prims.get(p as usize), self.prims.get(q as usize)) {
+            (Prim::Triangle(a), Prim::Triangle(b)) => {
+                let key = |t: &crate::geometry::Triangle| {
+                    let mut k = t.v.map(|v| [v.x, v.y, v.z].map(f32::to_bits));
+                    k.sort_unstable();
+                    k
+                };
+                key(a) == key(b)
+            }
+            (Prim::Sphere(a), Prim::Sphere(b)) => {
+                a.center.to_array().map(f32::to_bits) == b.center.to_array().map(f32::to_bits)
+                    && a.radius.to_bits() == b.radius.to_bits()
+            }
+            _ => false,
+        }
     }
 
-    /// How many units it takes to miss hit `e` (through an edge or an end of the interval).
-    fn missable(&self, ray: &Ray, e: &Exact) -> f64 {
-        let inside = e.inside_margin(self.is_triangle(e.prim));
-        let lo = (e.t_f64 - ray.t_min as f64) / self.t_min_bound(ray, e);
-        let hi = (ray.t_max as f64 - e.t_f64) / e.tb;
-        inside.min(lo).min(hi).max(0.0)
-    }
-
-    /// How many units it takes to hit `e` in front of `t_star` (or anywhere in
-    /// the interval when `t_star` is the far end), whose own unit `t` bound
-    /// is `tb_star`: two computed distances may come out in either order when
-    /// they differ by less than the larger of their bounds.
-    fn reachable(&self, ray: &Ray, e: &Exact, t_star: f64, tb_star: f64) -> f64 {
-        if e.t.is_none() {
+    /// Unsigned margin of the order of the distances of `e` and `f` (module
+    /// docs): `|t_e - t_f| / (u kappa)`, `kappa` over the inputs of both
+    /// (shared ones once) plus one rounding of each distance; infinite for
+    /// the same surface, 0 for an exact tie between different surfaces.
+    fn order_units(&self, ray: &Ray, e: &Exact, f: &Exact) -> f64 {
+        if self.identical(e.prim, f.prim) {
             return f64::INFINITY;
         }
-        let outside = -e.inside_margin(self.is_triangle(e.prim));
-        let behind = (e.t_f64 - t_star) / e.tb.max(tb_star);
-        let before = (ray.t_min as f64 - e.t_f64) / self.t_min_bound(ray, e);
-        outside.max(behind).max(before).max(0.0)
+        let (Some(te), Some(tf), Some(de), Some(df)) = (&e.t, &f.t, &e.dt, &f.dt) else {
+            return f64::INFINITY;
+        };
+        let sign = if te.cmp_exact(tf) == Ordering::Equal { 0 } else { 1 };
+        let kappa = de.minus(df).kappa(ray.origin.as_dvec3(), ray.dir.as_dvec3()) + e.t_f64.abs() + f.t_f64.abs();
+        units(sign, te.diff_f64(tf).abs(), kappa)
     }
 
+    /// Units it takes `e` to come in front of `f` (0 if it already is).
+    fn front_units(&self, ray: &Ray, e: &Exact, f: &Exact) -> f64 {
+        match (&e.t, &f.t) {
+            (Some(te), Some(tf)) if te.cmp_exact(tf).is_le() => 0.0,
+            _ => self.order_units(ray, e, f),
+        }
+    }
+
+    /// The conditioning margin of `truth` (module docs).
     fn margin(&self, ray: &Ray, truth: &Truth) -> f64 {
-        let t_star = truth.t_f64().unwrap_or(ray.t_max as f64);
-        let tb_star =
-            truth.candidates.iter().filter(|e| truth.prims.contains(&e.prim)).map(|e| e.tb).fold(0.0, f64::max);
+        let answer: Vec<&Exact> = truth.candidates.iter().filter(|e| truth.prims.contains(&e.prim)).collect();
         let mut m = f64::INFINITY;
-        if truth.t.is_some() {
-            // The answer survives if any of its tied primitives does.
-            m = truth
-                .candidates
-                .iter()
-                .filter(|e| truth.prims.contains(&e.prim))
-                .map(|e| self.missable(ray, e))
-                .fold(0.0, f64::max);
+        for (k, a) in answer.iter().enumerate() {
+            m = m.min(a.miss_units());
+            for b in &answer[k + 1..] {
+                m = m.min(self.order_units(ray, a, b));
+            }
         }
         for e in truth.candidates.iter().filter(|e| !truth.prims.contains(&e.prim)) {
-            m = m.min(self.reachable(ray, e, t_star, tb_star));
+            let front = answer.iter().map(|a| self.front_units(ray, e, a)).fold(f64::INFINITY, f64::min);
+            m = m.min(e.enter_units().max(if answer.is_empty() { 0.0 } else { front }));
         }
         m
     }
@@ -475,24 +581,26 @@ impl Arbiter {
         if exact {
             return Verdict::Exact;
         }
-        // Units it takes to produce this answer: reach the returned primitive,
-        // and skip every exact hit before it, by missing it or by misordering
-        // two distances within the bound. Primitives exactly tied are skipped
-        // only if each can be missed on its own: a ray through a shared edge
-        // that misses both neighbours (a leak) is not judged wrong here, the
-        // leak check of crossing rays catches it.
-        let (mut need, t_answer, tb_answer) = match answer {
-            None => (0.0, f64::INFINITY, 0.0),
-            Some(p) => {
-                let e = truth.candidates.iter().find(|e| e.prim == p).cloned().unwrap_or_else(|| self.evaluate(ray, p));
-                let t = if e.t_f64.is_nan() { f64::INFINITY } else { e.t_f64 };
-                (self.reachable(ray, &e, ray.t_max as f64, 0.0), t, e.tb)
-            }
-        };
-        for e in truth.candidates.iter().filter(|e| e.hit && e.t_f64 <= t_answer && Some(e.prim) != answer) {
-            let misorder =
-                if t_answer.is_finite() { (t_answer - e.t_f64) / e.tb.max(tb_answer) } else { f64::INFINITY };
-            need = f64::max(need, self.missable(ray, e).min(misorder));
+        // Units it takes to produce this answer: bring the returned primitive
+        // into the interval, and skip every exact hit no farther than it, by
+        // missing it or by reversing the order of the two distances. Exact
+        // ties are skipped only if each can be missed on its own: a ray
+        // through a shared edge that misses both neighbours (a leak) is not
+        // judged wrong here, the leak check of crossing rays catches it.
+        let returned = answer
+            .map(|p| truth.candidates.iter().find(|e| e.prim == p).cloned().unwrap_or_else(|| self.evaluate(ray, p)));
+        let mut need = returned.as_ref().map_or(0.0, |r| if r.t.is_none() { f64::INFINITY } else { r.enter_units() });
+        for e in truth.candidates.iter().filter(|e| e.hit) {
+            let skip = match &returned {
+                None => e.miss_units(),
+                Some(r) if self.identical(e.prim, r.prim) => continue,
+                Some(r) => match (&e.t, &r.t) {
+                    (Some(te), Some(tr)) if te.cmp_exact(tr).is_le() => e.miss_units().min(self.order_units(ray, e, r)),
+                    (Some(_), Some(_)) => continue,
+                    _ => e.miss_units(),
+                },
+            };
+            need = need.max(skip);
         }
         if need <= K_TRACER { Verdict::WithinBound } else { Verdict::Wrong }
     }
@@ -622,18 +730,32 @@ mod tests {
 
     #[test]
     fn a_hit_one_ulp_inside_an_edge_is_ill_conditioned_but_exact() {
-        // Triangle with an edge on x = 0; rays at x = +-1 ulp of 0.25-scale numbers.
-        let p = prims(vec![[Vec3::new(0.0, -1.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0)]], vec![]);
+        // Triangle with an edge on x = 1; rays at one ulp inside and outside it.
+        let p = prims(vec![[Vec3::new(1.0, -1.0, 0.0), Vec3::new(1.0, 1.0, 0.0), Vec3::new(-1.0, 0.0, 0.0)]], vec![]);
         let arb = Arbiter::new(p);
-        let tiny = f32::from_bits(1); // smallest subnormal: exactly representable, exactly inside
-        let r = Ray::new(Vec3::new(tiny, 0.0, 1.0), Vec3::new(0.0, 0.0, -1.0));
+        let inside = 1.0 - f32::EPSILON / 2.0; // the float below 1
+        let r = Ray::new(Vec3::new(inside, 0.0, 1.0), Vec3::new(0.0, 0.0, -1.0));
         let truth = arb.truth(&r);
         assert_eq!(truth.prims, vec![0]);
-        assert!(truth.ill_conditioned());
-        let r = Ray::new(Vec3::new(-tiny, 0.0, 1.0), Vec3::new(0.0, 0.0, -1.0));
+        // One unit moves the origin and the edge's vertices by 2^-24 each: the
+        // hit is 2^-24 inside, half of what they can move together.
+        assert!(truth.ill_conditioned() && (truth.margin - 0.5).abs() < 1e-6, "{}", truth.margin);
+        let r = Ray::new(Vec3::new(1.0 + f32::EPSILON, 0.0, 1.0), Vec3::new(0.0, 0.0, -1.0));
         let truth = arb.truth(&r);
-        assert!(truth.prims.is_empty() && truth.ill_conditioned());
+        assert!(truth.prims.is_empty() && truth.ill_conditioned(), "{}", truth.margin);
         assert_eq!(arb.judge(&r, &truth, Some(0)), Verdict::WithinBound);
+        // 64 ulps outside: beyond the tracer's bound of 32 units.
+        let r = Ray::new(Vec3::new(1.0 + 64.0 * f32::EPSILON, 0.0, 1.0), Vec3::new(0.0, 0.0, -1.0));
+        let truth = arb.truth(&r);
+        assert!(truth.prims.is_empty() && !truth.ill_conditioned(), "{}", truth.margin);
+        assert_eq!(arb.judge(&r, &truth, Some(0)), Verdict::Wrong);
+        // Exact zeros are not rounded: a ray at the smallest subnormal off an
+        // edge on x = 0, along an axis, keeps its side under any one-unit
+        // perturbation (first order, underflow aside).
+        let p = prims(vec![[Vec3::new(0.0, -1.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0)]], vec![]);
+        let arb = Arbiter::new(p);
+        let r = Ray::new(Vec3::new(f32::from_bits(1), 0.0, 1.0), Vec3::new(0.0, 0.0, -1.0));
+        assert!(!arb.truth(&r).ill_conditioned());
     }
 
     #[test]
@@ -669,6 +791,41 @@ mod tests {
             found += brute.len();
         }
         assert!(found > 3000, "{found}");
+    }
+
+    /// The candidate search keeps every triangle that can decide a margin up
+    /// to the tracer bound: on rays through a soup of small triangles, some
+    /// of them nearly coplanar layers (near ties in distance), the answer
+    /// and the margin (up to `2 K_TRACER`) over the candidates equal those
+    /// over every triangle.
+    #[test]
+    fn margins_over_the_candidates_equal_margins_over_every_triangle() {
+        let mut rng = crate::rays::Rng::new(9);
+        let mut tris: Vec<[Vec3; 3]> = Vec::new();
+        for _ in 0..150 {
+            let c = rng.unit_vector() * rng.f32() * 0.5;
+            let t = [c, c + rng.unit_vector() * 0.2, c + rng.unit_vector() * 0.2];
+            // A second layer a few float32 units behind, slightly tilted.
+            let off = rng.unit_vector() * (rng.f32() * 64.0 * f32::EPSILON);
+            tris.push(t);
+            tris.push([t[0] + off, t[1] + off * 1.5, t[2] + off * 0.5]);
+        }
+        let n = tris.len();
+        let arb = Arbiter::new(prims(tris, vec![]));
+        let all: Vec<usize> = (0..n).collect();
+        let (mut low, mut rays) = (0, 0);
+        for _ in 0..400 {
+            let o = rng.unit_vector() * 2.0;
+            let r = Ray::new(o, rng.unit_vector() * 0.3 - o);
+            let a = arb.truth(&r);
+            let b = arb.truth_over(&r, &all);
+            assert_eq!(a.prims, b.prims, "{}", replay_line(&r));
+            let cap = 2.0 * K_TRACER;
+            assert_eq!(a.margin.min(cap), b.margin.min(cap), "{}", replay_line(&r));
+            low += (b.margin <= cap) as usize;
+            rays += !b.prims.is_empty() as usize;
+        }
+        assert!(low > 20 && rays > 100, "{low} margins below the cap, {rays} hits");
     }
 
     #[test]

@@ -76,6 +76,12 @@ pub struct ArbiterStats {
     pub native_wrong_outside_ill_conditioned: u64,
     /// The same for the reference.
     pub reference_wrong_outside_ill_conditioned: u64,
+    /// The tracer's verdicts on the rays that are not ill-conditioned (those
+    /// counted in `native_wrong_outside_ill_conditioned`, by verdict:
+    /// `within-bound` or `wrong`).
+    pub native_well_conditioned: BTreeMap<String, u64>,
+    /// The same for the reference.
+    pub reference_well_conditioned: BTreeMap<String, u64>,
     /// Heuristic class -> arbiter class, `heuristic>arbiter` keys.
     pub heuristic_check: BTreeMap<String, u64>,
     /// Rays the heuristic explained as rounding (any class but `unclassified`
@@ -131,6 +137,12 @@ pub fn arbitrate(
         let well = !truth.ill_conditioned();
         s.native_wrong_outside_ill_conditioned += (well && vn != Verdict::Exact) as u64;
         s.reference_wrong_outside_ill_conditioned += (well && vr != Verdict::Exact) as u64;
+        if well && vn != Verdict::Exact {
+            *s.native_well_conditioned.entry(verdict_name(vn).into()).or_default() += 1;
+        }
+        if well && vr != Verdict::Exact {
+            *s.reference_well_conditioned.entry(verdict_name(vr).into()).or_default() += 1;
+        }
         let heuristic =
             heuristic_class(ray, set.tags[i], &ours.hits[i], &reference.hits[i], &set.prims).unwrap_or("none");
         *s.heuristic_check.entry(format!("{heuristic}>{}", class.name())).or_default() += 1;
@@ -168,13 +180,15 @@ pub fn format_stats(tracer: &str, reference: &str, s: &ArbiterStats) -> String {
     let _ = writeln!(
         o,
         "  arbiter, {tracer} vs {reference}: {} rays judged; {}; {tracer}: {}; {reference}: {}; \
-         not exact outside ill-conditioned: {tracer} {}, {reference} {} (bound K = {K_TRACER})",
+         not exact outside ill-conditioned: {tracer} {} ({}), {reference} {} ({}) (bound K = {K_TRACER})",
         s.judged,
         join(&s.classes),
         join(&s.native),
         join(&s.reference),
         s.native_wrong_outside_ill_conditioned,
-        s.reference_wrong_outside_ill_conditioned
+        join(&s.native_well_conditioned),
+        s.reference_wrong_outside_ill_conditioned,
+        join(&s.reference_well_conditioned)
     );
     if s.judged > 0 {
         let _ = writeln!(

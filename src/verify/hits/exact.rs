@@ -47,7 +47,8 @@ pub fn dot(a: &BigVec, b: &BigVec) -> BigInt {
     &a[0] * &b[0] + &a[1] * &b[1] + &a[2] * &b[2]
 }
 
-fn sign(x: &BigInt) -> i32 {
+/// The sign of `x` as -1, 0 or 1.
+pub fn sign(x: &BigInt) -> i32 {
     match x.sign() {
         Sign::Minus => -1,
         Sign::NoSign => 0,
@@ -113,6 +114,12 @@ pub fn ratio_f64(n: &BigInt, d: &BigInt) -> f64 {
     m * 2f64.powi(k / 2) * 2f64.powi(k - k / 2)
 }
 
+/// `x 2^(-149 units)` rounded to `f64`: the value of a product of `units`
+/// [`fixed`] numbers.
+pub fn scaled_f64(x: &BigInt, units: usize) -> f64 {
+    ratio_f64(x, &(BigInt::from(1) << (149 * units)))
+}
+
 /// An exact hit distance `(p + q sqrt(d)) / m` with `m > 0`, `d >= 0`
 /// (`q = 0` for a triangle's rational `t`).
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -154,6 +161,18 @@ impl ExactT {
             Ordering::Greater
         } else {
             self.cmp_exact(&Self::from_f32(x))
+        }
+    }
+
+    /// `self - o` rounded to `f64`: exact before the rounding when both are
+    /// rational, else the difference of the two values rounded to `f64`
+    /// (absolute error about `2^-53 (|self| + |o|)`). For margins and
+    /// reports; the sign is [`Self::cmp_exact`]'s.
+    pub fn diff_f64(&self, o: &ExactT) -> f64 {
+        if self.q.is_zero() && o.q.is_zero() {
+            ratio_f64(&(&self.p * &o.m - &o.p * &self.m), &(&self.m * &o.m))
+        } else {
+            self.to_f64() - o.to_f64()
         }
     }
 

@@ -9,6 +9,7 @@ pub mod arbiter;
 pub mod arbitrate;
 pub mod bounds;
 pub mod classify;
+pub mod condition;
 pub mod exact;
 pub mod line_index;
 pub mod report;

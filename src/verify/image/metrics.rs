@@ -189,6 +189,24 @@ pub fn compare(reference: &Image, test: &Image, opts: &CompareOptions) -> Result
     })
 }
 
+/// The part of a test image's expected relMSE that a noisy reference adds by
+/// itself: sum var / (ref^2 + eps) / (n c), with `variance` the reference's
+/// per-pixel variance (of the mean, when the reference is a mean of renders).
+/// For a test image independent of the reference, E[(t - r)^2] is
+/// E[(t - mu)^2] plus var(r) at each pixel, so subtracting this from the
+/// measured relMSE leaves the test's own error (to first order: the
+/// denominator uses the noisy `ref`).
+pub fn rel_mse_noise_floor(reference: &Image, variance: &Image) -> Result<f64> {
+    same_size(reference, variance)?;
+    let sum: f64 = reference
+        .pixels
+        .iter()
+        .zip(&variance.pixels)
+        .flat_map(|(r, v)| (0..3).map(move |c| f64::from(v[c]) / (f64::from(r[c]).powi(2) + REL_MSE_EPSILON)))
+        .sum();
+    Ok(sum / (reference.pixels.len() * 3) as f64)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -239,5 +257,35 @@ mod tests {
     fn mismatched_sizes_are_an_error() {
         let e = compare(&Image::new(2, 2), &Image::new(3, 2), &CompareOptions::default()).unwrap_err();
         assert!(e.to_string().contains("2x2") && e.to_string().contains("3x2"), "{e}");
+    }
+
+    #[test]
+    fn subtracting_the_reference_noise_leaves_the_test_error() {
+        // Every pixel's true value is 0.5. The reference is the mean of 256 uniform draws in
+        // [0, 1) (variance of the mean 1/3072), the test the truth plus an independent
+        // (U - 1/2) / 4 (variance 1/192, 16 times the reference's). The test's own relMSE is
+        // 1/192 / (0.25 + eps); the measured one adds the reference's 1/3072 / (0.25 + eps)
+        // (6.25%), which the floor removes. Left over: the noisy denominator's second-order
+        // effect, f''(0.5) var / 2 f(0.5) = 0.4%, and sampling noise: 49152 squared
+        // differences of near-Gaussian noise scatter their mean by sqrt(2 / 49152) = 0.64%.
+        // 3% is over four of those, and half the correction.
+        let (w, h) = (128u32, 128u32);
+        let mut rng = crate::rng::Pcg32::new(7, 0);
+        let mut reference = Image::new(w, h);
+        let mut test = Image::new(w, h);
+        for (r, t) in reference.pixels.iter_mut().zip(&mut test.pixels) {
+            for _ in 0..256 {
+                *r += Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) / 256.0;
+            }
+            *t = Vec3::splat(0.5) + (Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5) / 4.0;
+        }
+        let variance = Image { width: w, height: h, pixels: vec![Vec3::splat(1.0 / 3072.0); (w * h) as usize] };
+        let floor = rel_mse_noise_floor(&reference, &variance).unwrap();
+        let measured = compare(&reference, &test, &CompareOptions::default()).unwrap().rel_mse;
+        let own = (1.0 / 192.0) / (0.25 + REL_MSE_EPSILON);
+        assert!((floor * 16.0 / own - 1.0).abs() < 0.03, "floor {floor} against {}", own / 16.0);
+        assert!(measured / own - 1.0 > 0.04, "the reference's noise is in the measured {measured}");
+        assert!(((measured - floor) / own - 1.0).abs() < 0.03, "{measured} - {floor} against {own}");
+        assert!(rel_mse_noise_floor(&reference, &Image::new(2, 2)).is_err());
     }
 }
