@@ -2,7 +2,9 @@
 //! OpenImageIO's `ImageBufAlgo.compare` and NVIDIA's flip-evaluator (Python,
 //! `scripts/mitsuba/crosscheck_metrics.py` in the `.venv/` that
 //! `scripts/mitsuba/setup.sh` makes), on rtdiff renders of two scenes at 1
-//! and 16 spp and on two Mitsuba 3 renders (PIZ EXRs) at 4 and 16 spp.
+//! and 16 spp and on two Mitsuba 3 renders (PIZ EXRs) at 4 and 16 spp; and
+//! OpenImageIO's compare on every reference pair (each Mitsuba reference of
+//! `reference/` against rtdiff's render of its scene).
 //!
 //! Skipped (with a message) when `.venv/bin/python` is missing, unless
 //! `RTDIFF_REQUIRE_PYTHON=1`, as `scripts/test.sh` sets, makes that a failure.
@@ -30,6 +32,16 @@ fn render(dir: &Path, scene: &str, spp: u32, seed: u32) -> PathBuf {
         .args(["--width", "128", "--height", "96", "--quiet"])
         .args(["--spp", &spp.to_string(), "--seed", &seed.to_string()]));
     out
+}
+
+/// `rtdiff compare A B --json --threshold T`, parsed.
+fn rtdiff_compare(a: &Path, b: &Path, threshold: &str) -> Value {
+    serde_json::from_str(&run(Command::new(env!("CARGO_BIN_EXE_rtdiff")).arg("compare").arg(a).arg(b).args([
+        "--json",
+        "--threshold",
+        threshold,
+    ])))
+    .unwrap()
 }
 
 #[track_caller]
@@ -60,12 +72,7 @@ fn metrics_and_flip_match_openimageio_and_flip_evaluator() {
     }
     let oracle: Vec<Value> = serde_json::from_str(&run(&mut cmd)).unwrap();
     for ((a, b), o) in pairs.iter().zip(&oracle) {
-        let r: Value = serde_json::from_str(&run(Command::new(env!("CARGO_BIN_EXE_rtdiff"))
-            .arg("compare")
-            .arg(a)
-            .arg(b)
-            .args(["--json", "--threshold", threshold])))
-        .unwrap();
+        let r = rtdiff_compare(a, b, threshold);
         let name = a.file_name().unwrap().to_string_lossy().to_string();
         let (m, oi) = (&r["metrics"], &o["oiio"]);
         let f = |v: &Value| v.as_f64().unwrap();
@@ -118,5 +125,54 @@ fn metrics_and_flip_match_openimageio_and_flip_evaluator() {
             );
         }
     }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `rtdiff compare` against OpenImageIO's compare on every pair the image oracle
+/// compares: each reference of `reference/` and rtdiff's render of its scene (in
+/// its model, at its size, with its features). Same tolerances as above: 1e-6
+/// relative, the max-error pixel and the count over the threshold exactly.
+#[test]
+fn compare_matches_openimageio_on_every_reference_pair() {
+    let Some(py) = python() else { return };
+    let dir = common::temp_dir("crosscheck-refs");
+    let refs = common::references::manifest();
+    let mut pairs = Vec::new();
+    for r in &refs {
+        let scene = common::references::load(r, 0, &common::references::no_tweak);
+        let ours = dir.join(format!("{}.exr", r.name()));
+        common::references::render_with(&scene, &common::references::plain).write(&ours).unwrap();
+        pairs.push((r.image.clone(), ours));
+    }
+    let threshold = "0.001";
+    let mut cmd = Command::new(&py);
+    cmd.arg(root().join("scripts/mitsuba/crosscheck_metrics.py")).args(["--threshold", threshold, "--no-flip"]);
+    for (a, b) in &pairs {
+        cmd.arg(a).arg(b);
+    }
+    let oracle: Vec<Value> = serde_json::from_str(&run(&mut cmd)).unwrap();
+    let f = |v: &Value| v.as_f64().unwrap();
+    let mut worst = 0f64;
+    for ((a, b), o) in pairs.iter().zip(&oracle) {
+        let r = rtdiff_compare(a, b, threshold);
+        let name = b.file_stem().unwrap().to_string_lossy().to_string();
+        let (m, oi) = (&r["metrics"], &o["oiio"]);
+        for (what, ours, theirs) in [
+            ("MAE", f(&m["mae"]), f(&oi["meanerror"])),
+            ("RMSE", f(&m["rmse"]), f(&oi["rms_error"])),
+            ("PSNR", f(&m["psnr"]), f(&oi["PSNR"])),
+            ("max error", f(&m["max_error"]), f(&oi["maxerror"])),
+        ] {
+            close(&format!("{name} {what}"), ours, theirs, 1e-6);
+            worst = worst.max((ours - theirs).abs() / theirs.abs().max(1e-300));
+        }
+        assert_eq!(
+            (&m["max_error_pixel"][0], &m["max_error_pixel"][1], &m["max_error_channel"]),
+            (&oi["maxx"], &oi["maxy"], &oi["maxc"]),
+            "{name}: max error location"
+        );
+        assert_eq!(m["over_threshold"], oi["nfail"], "{name}: pixels over the threshold");
+    }
+    println!("{} reference pairs: rtdiff compare and OpenImageIO agree within {worst:.1e} relative", pairs.len());
     std::fs::remove_dir_all(&dir).ok();
 }

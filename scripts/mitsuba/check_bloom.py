@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Bloom against OpenImageIO: apply the reports' bloom to rtdiff's image before bloom with OIIO's own
-operators (../shared/notes/mitsuba.md, "Bloom oracle") and compare with rtdiff's bloomed image.
+operators (../shared/notes/mitsuba.md, "Bloom oracle") and compare with rtdiff's bloomed image. `straddling_pixels` counts the pixels within 1% above the
+threshold (the ones a 1% higher threshold would leave out: the check's power against a moved threshold).
 
   .venv/bin/python scripts/mitsuba/check_bloom.py BEFORE.exr AFTER.exr THRESHOLD KERNEL_SIZE SCALE
 
@@ -35,7 +36,11 @@ def main():
     diff = np.abs(ours - ref_after)
     worst = np.unravel_index(int(np.argmax(diff)), diff.shape)
     bright_px = int((mask[:, :, 0] > 0).sum())
+    # Pixels within 1% above the threshold: those a 1% higher threshold would drop.
+    lum = y.get_pixels(oiio.FLOAT)[:, :, 0]
+    straddling = int(((lum >= t) & (lum < 1.01 * t)).sum())
     out = {"max_abs_diff": float(diff.max()), "pixel": [int(worst[1]), int(worst[0])], "bright_pixels": bright_px,
+           "straddling_pixels": straddling,
            "changed_pixels": int((np.abs(ref_after - rgb.get_pixels(oiio.FLOAT)) > 1e-6).any(axis=2).sum()),
            "tolerance": TOL}
     print(json.dumps(out))

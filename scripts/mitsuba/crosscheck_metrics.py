@@ -11,7 +11,7 @@ For each REF TEST pair of linear EXRs, prints (JSON, one object per pair):
 Images are loaded with OIIO (flip-evaluator's own EXR reader mis-decodes PIZ, see
 ../shared/notes/mitsuba.md) and passed as HxWx3 float32 arrays.
 
-  .venv/bin/python scripts/mitsuba/crosscheck_metrics.py [--threshold T] REF TEST [REF TEST ...]
+  .venv/bin/python scripts/mitsuba/crosscheck_metrics.py [--threshold T] [--no-flip] REF TEST [REF TEST ...]
   .venv/bin/python scripts/mitsuba/crosscheck_metrics.py --mitsuba-pair DIR   # two Mitsuba EXRs (spp 4, 16)
 """
 import argparse
@@ -49,7 +49,7 @@ def aces(x):
     return (x * x * ACES[0] + x * ACES[1] + ACES[2]) / (x * x * ACES[3] + x * ACES[4] + ACES[5])
 
 
-def pair(ref_path, test_path, threshold):
+def pair(ref_path, test_path, threshold, with_flip=True):
     import OpenImageIO as oiio
     import flip_evaluator as fe
 
@@ -72,6 +72,8 @@ def pair(ref_path, test_path, threshold):
             "nfail": c.nfail,
         },
     }
+    if not with_flip:
+        return out
     _, ldr, _ = fe.evaluate(np.clip(ref, 0, 1), np.clip(test, 0, 1), "LDR", inputsRGB=False, applyMagma=False)
     _, hdr, params = fe.evaluate(ref, test, "HDR", applyMagma=False)
     out["flip"] = {"ldr": float(ldr), "hdr": float(hdr), "hdr_params": {k: float(v) for k, v in params.items()
@@ -115,6 +117,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--threshold", type=float, default=1e-3)
     ap.add_argument("--mitsuba-pair", metavar="DIR")
+    ap.add_argument("--no-flip", action="store_true", help="OpenImageIO's compare only")
     ap.add_argument("images", nargs="*")
     a = ap.parse_args()
     if a.mitsuba_pair:
@@ -122,7 +125,7 @@ def main():
         return
     if len(a.images) == 0 or len(a.images) % 2:
         ap.error("give REF TEST pairs")
-    res = [pair(a.images[i], a.images[i + 1], a.threshold) for i in range(0, len(a.images), 2)]
+    res = [pair(a.images[i], a.images[i + 1], a.threshold, not a.no_flip) for i in range(0, len(a.images), 2)]
     print(json.dumps(res, indent=1))
 
 

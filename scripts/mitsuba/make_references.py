@@ -29,21 +29,18 @@ import rtdiff_mitsuba as rm  # noqa: E402
 # Image size of every reference: large enough for ~16K pixel comparisons per scene, small
 # enough to keep reference/ well under 25 MB and the cargo test to seconds.
 WIDTH = HEIGHT = 128
-# Independent Mitsuba renders of a noisy scene (the Welch test's reference sample size).
-SEEDS = 16
+# Independent Mitsuba renders of a noisy scene (the Welch test's reference sample size K; see
+# tests/mitsuba_reference.rs for why 64: with K = 16 and 8 the per-pixel t-tests' far tails, where
+# Benjamini-Hochberg decides, rest on variances estimated from a handful of seeds).
+SEEDS = 64
 MODELS = ("phong", "physical")
 # Scenes without an image oracle, and why (docs/oracles.md repeats this).
-NO_ORACLE = {
-    "all_features": "glossy reflection (the reports' perturbed mirror) has no Mitsuba equivalent and bloom is "
-                    "a post-process (its oracle is OpenImageIO); without them (--feature glossy=off --feature "
-                    "bloom=off) the plugin renders it, but its recursion tree (mirror + transparency at every "
-                    "level, 64-crossing shadow rays, one JIT kernel per branch) takes over 10 minutes a pass",
-}
-# Extra references: a scene with feature switches flipped (name, scene, --feature arguments). The
-# all_features scene without glossy and bloom is the only reference with transparency, depth of field
-# (thin lens), bilinear textures, interpolated normals and a point + parallelogram light together.
-# (none yet: see NO_ORACLE["all_features"])
-VARIANTS = []
+NO_ORACLE = {}
+# Feature switches of a scene's reference: bloom is a post-process outside Mitsuba (its oracle is
+# OpenImageIO, tests/mitsuba_live.rs), so all_features is referenced before bloom. It is the only
+# reference with glossy reflection, transparency, depth of field (thin lens), bilinear textures,
+# interpolated normals and a point + parallelogram light together.
+FEATURES = {"all_features": ["bloom=off"]}
 
 
 def sha256(path):
@@ -69,7 +66,7 @@ def main():
             old = {(e["name"], e["model"]): e for e in json.load(f)["references"]}
     scenes = sorted(f[:-5] for f in os.listdir(os.path.join(ROOT, "scenes")) if f.endswith(".json"))
     entries = []
-    jobs = [(name, name, []) for name in scenes if name not in NO_ORACLE] + VARIANTS
+    jobs = [(name, name, FEATURES.get(name, [])) for name in scenes if name not in NO_ORACLE]
     for ref_name, name, features in jobs:
         for model in MODELS:
             if a.only and ref_name not in a.only:
@@ -119,6 +116,7 @@ def make_one(mi, a, ref_name, name, features, model):
         "scene": scene_rel,
         "features": features,
         "scene_sha256": sha256(scene_path),
+        "traced_sha256": cfg["traced_sha256"],
         "model": model,
         "deterministic": cfg["deterministic"],
         "mitsuba_spp": cfg["mitsuba_spp"],

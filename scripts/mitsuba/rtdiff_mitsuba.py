@@ -1,22 +1,44 @@
 """Mitsuba 3 side of rtdiff's image oracle: the reports' Whitted integrator as a Mitsuba plugin,
 and a render loop over a scene exported by `rtdiff export SCENE --to mitsuba -o DIR`.
 
-Mitsuba 3 has no Phong BSDF, no Whitted integrator, no segment light and no parallelogram light
-with bilinear corner colours. `rtdiff_whitted` (registered with `mi.register_integrator`) adds them:
-it intersects with Mitsuba's `scene.ray_intersect` / `ray_test`, takes camera rays from Mitsuba's
-sensor (`perspective` / `thinlens`), looks up kd through Mitsuba's `diffuse` BSDF and `bitmap`
-texture (nearest / bilinear, clamped), draws random numbers from Mitsuba's sampler, and spawns
-secondary rays with Mitsuba's own offsets. Only the shading formulas are written here, from the
-course reports (../shared/seeds/), independently of rtdiff's Rust code:
+Mitsuba 3 has no Phong BSDF, no Whitted integrator, no glossy lobe of the reports' kind, no
+segment light and no parallelogram light with bilinear corner colours. `rtdiff_whitted`
+(registered with `mi.register_integrator`) adds them: it intersects with Mitsuba's
+`scene.ray_intersect` / `ray_test` (Embree inside Mitsuba), takes camera rays from Mitsuba's
+sensor (`perspective` / `thinlens`), reads the hit point, geometric normal and interpolated
+shading normal from Mitsuba's surface interaction, looks up kd through Mitsuba's `diffuse` BSDF and
+`bitmap` texture (nearest / bilinear, clamped), and draws every random number from Mitsuba's
+sampler. Only the reports' model is written here, from the course reports (../shared/seeds/) and
+docs/oracles.md, independently of rtdiff's Rust code:
 
   phong:    sum over light samples of  I * (Kd max(0, n.l) + Ks max(0, r.v)^Ns) / N
   physical: Lambert Kd/pi; point and segment samples I / r^2 (segment: length / N per sample);
             parallelogram samples are radiance with the cosine at both ends (area / N per sample)
-  both:     shadow rays (transparent blockers attenuate by 1 - opacity), mirror recursion
-            weighted by Ks to max_depth, alpha blending  opacity * surface + (1 - opacity) * behind.
+  both:     shadow rays (transparent blockers attenuate by 1 - opacity, at most 64 crossings),
+            mirror recursion weighted by Ks to max_depth, alpha blending
+            opacity * surface + (1 - opacity) * behind;
+  glossy:   the mirror direction r perturbed inside a square of side a = 1 / shininess
+            perpendicular to r (the orthonormal pair of Duff et al. 2017 around r), du, dv
+            uniform in [-a/2, a/2); the average of N such rays at the first bounce (N =
+            glossy_samples), one ray per deeper bounce; a ray entering the surface (g.ng <= 0)
+            contributes black but counts in N.
 
-The render loop (`render`) samples pixel positions the way rtdiff does: the pixel centre for one
-sample per pixel, an n x n jittered grid for n*n samples, uniform otherwise; times lens samples.
+Secondary rays leave the surface by the model's spawn rule (docs/oracles.md, "Ray offsets"): the
+origin moves along the geometric normal, to the side the new ray goes, by the bound on the
+float32 error of the hit point (gamma(7) times the largest vertex coordinate of the triangle;
+gamma(6)|p - c| + gamma(5)|c| on a sphere) and one more float32 step away from the surface;
+shadow rays end 1e-4 of the way short of the light. Mitsuba's own `spawn_ray` pushes the origin
+(1 + max|p|) * 8.9e-5 off the surface instead, which moves the point a grazing mirror ray sees by
+up to 1e-2 on a curved mesh (monkey) and is not part of the model. The rule is the model's
+contract for where a secondary ray starts, not the renderer under test: the intersections, normals,
+camera, textures and samples stay Mitsuba's.
+
+The integrator is a wavefront over Dr.Jit arrays (one lane per pixel): the reports' ray tree is
+walked as a stack of nodes (ray, weight, depth), each node shaded for all lanes at once and
+evaluated before its children are pushed; the crossings of transparent blockers run in a
+symbolic `dr.while_loop`. The render loop (`render`) samples pixel positions the way rtdiff
+does: the pixel centre for one sample per pixel, an n x n jittered grid for n*n samples, uniform
+otherwise; times lens samples.
 """
 
 from __future__ import annotations
@@ -51,10 +73,54 @@ def setup(variant: str | None = None):
     return mi
 
 
+def gamma(n: int) -> float:
+    """n u / (1 - n u) with u = 2^-24, in float32 (the bound on n chained float32 roundings)."""
+    nu = np.float32(n) * np.float32(2.0**-24)
+    return float(nu / (np.float32(1.0) - nu))
+
+
+#: Shadow rays stop this fraction of the way short of the light sample.
+SHADOW_T_MAX = 1.0 - 1.0e-4
+#: At most this many transparent surfaces crossed by one shadow ray.
+MAX_SHADOW_CROSSINGS = 64
+
+
+def _host3(v, m: int) -> np.ndarray:
+    """An evaluated Dr.Jit 3-vector (or colour) of width m (or 1, broadcast) as an (m, 3) float64 array."""
+    cols = [np.broadcast_to(np.asarray(c.numpy(), dtype=np.float64), (m,)) for c in (v[0], v[1], v[2])]
+    return np.stack(cols, axis=1)
+
+
+def _seed32(stream: int, depth: int) -> int:
+    """A 32-bit sampler seed for (render stream, tree depth): SplitMix64 of both, high half."""
+    z = (stream * 0x9E3779B97F4A7C15 + depth * 0xBF58476D1CE4E5B9 + 0x94D049BB133111EB) & (2**64 - 1)
+    z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & (2**64 - 1)
+    z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & (2**64 - 1)
+    return (z ^ (z >> 31)) >> 32
+
+
 def _register(mi):
     import drjit as dr
 
     scalar = mi.variant().startswith("scalar")
+
+    def step_away(v, n):
+        """v moved one float32 step towards +inf where n > 0 and towards -inf where n < 0."""
+        if scalar:
+            if n == 0:
+                return v
+            return float(np.nextafter(np.float32(v), np.float32(math.inf if n > 0 else -math.inf)))
+        v = dr.select(v == 0.0, 0.0, v)  # -0 -> +0, so that +-0 step to +-the smallest subnormal
+        bits = dr.reinterpret_array(mi.Int32, v)
+        # For v >= 0 the next float up has bits + 1, for v < 0 bits - 1; down is the mirror image.
+        up = dr.reinterpret_array(mi.Float, dr.select(v >= 0.0, bits + 1, bits - 1))
+        down = dr.reinterpret_array(mi.Float, dr.select(v > 0.0, bits - 1, bits + 1))
+        down = dr.select(v == 0.0, -dr.reinterpret_array(mi.Float, mi.Int32(1)), down)
+        return dr.select(n > 0.0, up, dr.select(n < 0.0, down, v))
+
+    def _not(mask):
+        """Logical not of a mask (a Python bool in scalar variants, where ~True is -2)."""
+        return (not mask) if scalar else ~mask
 
     class RtdiffWhitted(mi.SamplingIntegrator):
         """The reports' recursive ray tracer (see the module docstring)."""
@@ -70,42 +136,105 @@ def _register(mi):
             self.max_depth = int(props.get("max_depth", self.cfg["max_depth"]))
             self.plan = self.cfg["plan"]
             self.mats = self.cfg["materials"]
-            self.shape_material = {s["id"]: s["material"] for s in self.cfg["shapes"]}
+            self.shape_cfg = {s["id"]: s for s in self.cfg["shapes"]}
             self.lights = self.cfg["lights"]
-            self.n_samples = int(self.cfg["light_samples"])
+            self.n_samples = max(int(self.cfg["light_samples"]), 1)
             self.jittered = self.cfg["light_sampling"] == "jittered"
-            self._shapes = None
+            self.glossy_samples = max(int(self.cfg.get("glossy_samples", 1)), 1)
+            self.bg = self.cfg["background"]
+            offset = self.cfg.get("ray_offset", {"kind": "robust"})
+            # The reports' fixed offset (origin + epsilon * unit direction), when the scene asks for it.
+            self.fixed_epsilon = float(offset["epsilon"]) if offset["kind"] == "fixed" else None
+            self._tables = None
 
-        # --- per-lane material parameters -------------------------------------------------
-        def _material_params(self, scene, si, active):
-            """ks, shininess, opacity, physical (bool) at each lane's hit."""
-            if self._shapes is None:
-                self._shapes = [(s, self.shape_material[s.id()]) for s in scene.shapes()]
-            ks = mi.Color3f(0.0)
-            shin = mi.Float(1.0)
-            opac = mi.Float(1.0)
-            phys = mi.Bool(False)
+        # --- per-shape tables ---------------------------------------------------------------
+        def _prepare(self, scene):
+            """Per-shape material and geometry tables, gathered per lane by the shape's registry id."""
+            if self._tables is not None:
+                return
+            shapes = list(scene.shapes())
+            rows = []
+            face_scale = []
+            for s in shapes:
+                c = self.shape_cfg[s.id()]
+                m = self.mats[c["material"]]
+                row = {
+                    "ks": m["ks"], "shin": m["shininess"], "opac": m["opacity"],
+                    "phys": m["model"] == "physical", "sphere": "center" in c,
+                    "center": c.get("center", [0.0, 0.0, 0.0]), "face_base": len(face_scale),
+                }
+                if not row["sphere"]:
+                    params = mi.traverse(s)
+                    v = np.array(params["vertex_positions"], dtype=np.float32).reshape(-1, 3)
+                    f = np.array(params["faces"], dtype=np.int64).reshape(-1, 3)
+                    # gamma(7) times the largest |coordinate| of the triangle's vertices: the
+                    # float32 error bound of a point interpolated from them (barycentric weights
+                    # sum to 1, so the bound never exceeds this floor).
+                    face_scale.extend((np.float32(gamma(7)) * np.abs(v[f]).max(axis=(1, 2))).tolist())
+                rows.append(row)
+            if scalar:
+                self._by_id = {s.id(): r for s, r in zip(shapes, rows)}
+                self._face_scale = face_scale
+                self._tables = True
+                return
+            ids = [int(dr.reinterpret_array(mi.UInt32, mi.ShapePtr(s))[0]) for s in shapes]
+            lut = np.zeros(max(ids) + 1, dtype=np.uint32)
+            for k, i in enumerate(ids):
+                lut[i] = k
+            col = lambda key, j=None: mi.Float([float(r[key] if j is None else r[key][j]) for r in rows])  # noqa: E731
+            self._lut = mi.UInt32(lut)
+            self._ks = [col("ks", j) for j in range(3)]
+            self._shin, self._opac = col("shin"), col("opac")
+            self._phys = mi.Bool([r["phys"] for r in rows])
+            self._sphere = mi.Bool([r["sphere"] for r in rows])
+            self._center = [col("center", j) for j in range(3)]
+            self._face_base = mi.UInt32([r["face_base"] for r in rows])
+            self._face_scale = mi.Float(face_scale if face_scale else [0.0])
+            self._tables = True
+
+        def _params(self, si, active):
+            """(ks, shininess, opacity, physical, error bound of si.p) at each lane's hit."""
             if scalar:
                 if not active:
-                    return ks, shin, opac, phys
-                m = self.mats[self.shape_material[si.shape.id()]]
-                return mi.Color3f(*m["ks"]), mi.Float(m["shininess"]), mi.Float(m["opacity"]), m["model"] == "physical"
-            for shape, mat in self._shapes:
-                m = self.mats[mat]
-                here = active & (si.shape == mi.ShapePtr(shape))
-                ks = dr.select(here, mi.Color3f(*m["ks"]), ks)
-                shin = dr.select(here, m["shininess"], shin)
-                opac = dr.select(here, m["opacity"], opac)
-                phys = phys | (here & (m["model"] == "physical"))
-            return ks, shin, opac, phys
+                    return mi.Color3f(0.0), 1.0, 1.0, False, mi.Vector3f(0.0)
+                r = self._by_id[si.shape.id()]
+                if r["sphere"]:
+                    c = mi.Vector3f(*r["center"])
+                    err = gamma(6) * dr.abs(si.p - c) + gamma(5) * dr.abs(c)
+                else:
+                    err = mi.Vector3f(self._face_scale[r["face_base"] + si.prim_index])
+                return mi.Color3f(*r["ks"]), r["shin"], r["opac"], r["phys"], err
+            k = dr.gather(mi.UInt32, self._lut, dr.reinterpret_array(mi.UInt32, si.shape), active)
+            g = lambda a: dr.gather(type(a), a, k, active)  # noqa: E731
+            ks = mi.Color3f(g(self._ks[0]), g(self._ks[1]), g(self._ks[2]))
+            sphere = g(self._sphere)
+            c = mi.Vector3f(g(self._center[0]), g(self._center[1]), g(self._center[2]))
+            tri = dr.gather(mi.Float, self._face_scale, g(self._face_base) + si.prim_index, active & ~sphere)
+            err = dr.select(sphere, gamma(6) * dr.abs(si.p - c) + gamma(5) * dr.abs(c), mi.Vector3f(tri))
+            return ks, g(self._shin), g(self._opac), g(self._phys), err
 
-        def _opacity(self, scene, si, active):
-            return self._material_params(scene, si, active)[2]
+        # --- the spawn rule ---------------------------------------------------------------------
+        def _origin(self, p, err, ng, w):
+            """Origin of a ray leaving p (error bound err, unit geometric normal ng) towards w."""
+            if self.fixed_epsilon is not None:
+                return p + self.fixed_epsilon * dr.normalize(w)
+            n = dr.select(dr.dot(w, ng) < 0.0, -ng, ng)
+            po = p + dr.dot(dr.abs(n), err) * n
+            return mi.Point3f(step_away(po.x, n.x), step_away(po.y, n.y), step_away(po.z, n.z))
 
-        # --- light samples ---------------------------------------------------------------
+        def _spawn(self, p, err, ng, d):
+            return mi.Ray3f(self._origin(p, err, ng, d), d)
+
+        def _spawn_to(self, p, err, ng, target):
+            o = self._origin(p, err, ng, target - p)
+            d = target - o
+            dist = dr.norm(d)
+            return mi.Ray3f(o, d / dr.maximum(dist, 1e-30), dist * SHADOW_T_MAX, 0.0, mi.Color0f())
+
+        # --- light samples --------------------------------------------------------------------
         def _light_samples(self, sampler, active):
             """Yield (position, colour, average_weight, measure, normal or None, is_point) per sample."""
-            n = max(self.n_samples, 1)
+            n = self.n_samples
             for L in self.lights:
                 if L["type"] == "point":
                     yield mi.Point3f(*L["position"]), mi.Color3f(*L["color"]), 1.0, 1.0, None, True
@@ -135,28 +264,34 @@ def _register(mi):
                         col = (1 - a) * ((1 - b) * c[0] + b * c[2]) + a * ((1 - b) * c[1] + b * c[3])
                         yield mi.Point3f(v0 + a * e1 + b * e2), col, 1.0 / count, area / count, normal, False
 
-        # --- shadow rays -----------------------------------------------------------------
-        def _visibility(self, scene, si, target, active):
-            """Fraction of light from `target` reaching `si`: 0/1, attenuated by transparent blockers."""
-            ray = si.spawn_ray_to(target)
+        # --- shadow rays ------------------------------------------------------------------------
+        def _visibility(self, scene, p, err, ng, target, active):
+            """Fraction of light from `target` reaching p: 0/1, attenuated by transparent blockers."""
+            ray = self._spawn_to(p, err, ng, target)
             if not self.plan["transparency"]:
                 return dr.select(active & scene.ray_test(ray, active), 0.0, 1.0)
-            trans = mi.Float(1.0)
-            alive = mi.Bool(active)
-            for _ in range(64):
+
+            def body(ray, trans, alive, i):
                 hit = scene.ray_intersect(ray, alive)
                 blocked = alive & hit.is_valid()
-                op = self._opacity(scene, hit, blocked)
-                trans = dr.select(blocked, trans * (1.0 - op), trans)
+                _, _, op, _, herr = self._params(hit, blocked)
+                trans = dr.select(blocked, dr.select(op < 1.0, trans * (1.0 - op), 0.0), trans)
                 alive = blocked & (op < 1.0)
-                trans = dr.select(blocked & (op >= 1.0), 0.0, trans)
-                if not dr.any(alive):
-                    break
-                ray = dr.select(alive, hit.spawn_ray_to(target), ray) if not scalar else hit.spawn_ray_to(target)
-            return dr.select(alive, 0.0, trans) if not scalar else (0.0 if alive else trans)
+                hng = mi.Vector3f(hit.n)
+                ray = dr.select(alive, self._spawn_to(hit.p, herr, hng, target), ray)
+                return ray, trans, alive, i + 1
 
-        # --- shading ---------------------------------------------------------------------
-        def _direct(self, scene, sampler, si, p, ns, wo, kd, ks, shin, phys, active):
+            ray, trans, alive, _ = dr.while_loop(
+                state=(ray, mi.Float(1.0), mi.Bool(active), mi.UInt32(0)),
+                cond=lambda ray, trans, alive, i: alive & (i < MAX_SHADOW_CROSSINGS),
+                body=body,
+                labels=("ray", "trans", "alive", "i"),
+            )
+            # Still alive after the last crossing: the cap was reached, no light (as the model).
+            return dr.select(alive | _not(active), 0.0, trans)
+
+        # --- shading ------------------------------------------------------------------------------
+        def _direct(self, scene, sampler, p, err, ng, ns, wo, kd, ks, shin, phys, active):
             total = mi.Color3f(0.0)
             for pos, col, avg_w, measure, normal, is_point in self._light_samples(sampler, active):
                 if not is_point and not self.plan["area_lights"]:
@@ -179,48 +314,131 @@ def _register(mi):
                 f = dr.select(phys, physical, phong)
                 f = dr.select(lit, f, 0.0)
                 if shadows:
-                    vis = self._visibility(scene, si, pos, lit)
-                    f = f * vis
+                    f = f * self._visibility(scene, p, err, ng, pos, lit & dr.any(f != 0.0))
                 total += f
             return total
 
-        def trace(self, scene, sampler, ray, depth, active):
-            bg = mi.Color3f(*self.cfg["background"])
+        def _glossy_directions(self, sampler, r, shin, depth, active):
+            """The reports' glossy rays around r: (direction, weight / N) pairs, N rays at depth 0."""
+            n = self.glossy_samples if depth == 0 else 1
+            # Duff et al. 2017, "Building an orthonormal basis, revisited" (listing 3).
+            sign = dr.copysign(1.0, r.z)  # glam's signum: -0 counts as negative
+            a0 = -1.0 / (sign + r.z)
+            b0 = r.x * r.y * a0
+            u = mi.Vector3f(1.0 + sign * r.x * r.x * a0, sign * b0, -sign * r.x)
+            w = mi.Vector3f(b0, sign + r.y * r.y * a0, -r.y)
+            a = 1.0 / dr.maximum(shin, 1.1754944e-38)
+            for _ in range(n):
+                s = sampler.next_2d(active)
+                g = dr.normalize(r + (s.x - 0.5) * a * u + (s.y - 0.5) * a * w)
+                yield g, 1.0 / n
+
+        def _shade(self, scene, sampler, ray, weight, depth, active):
+            """Shade one node of the ray tree for every lane: (contribution, children), each child
+            (ray, weight, mask)."""
             si = scene.ray_intersect(ray, active)
             valid = active & si.is_valid()
-            result = dr.select(valid, mi.Color3f(0.0), bg)
-            if not dr.any(valid):
-                return result
+            miss = dr.select(active & _not(valid), weight * mi.Color3f(*self.bg), 0.0)
+            if scalar and not valid:
+                return miss, []  # no surface to ask for a BSDF (a null shape in scalar mode)
             d = dr.normalize(ray.d)
             ng = mi.Vector3f(si.n)
             ns = mi.Vector3f(si.sh_frame.n)
             # Two-sided shading: both normals on the side the ray came from.
             ng = dr.select(dr.dot(ng, d) > 0.0, -ng, ng)
             ns = dr.select(dr.dot(ns, ng) < 0.0, -ns, ns)
-            ks, shin, opac, phys = self._material_params(scene, si, valid)
+            ks, shin, opac, phys, err = self._params(si, valid)
             bsdf = si.bsdf(ray)
             kd = mi.Color3f(bsdf.eval_diffuse_reflectance(si, valid))
             if self.plan["shading"]:
-                color = self._direct(scene, sampler, si, si.p, ns, -d, kd, ks, shin, phys, valid)
+                color = self._direct(scene, sampler, si.p, err, ng, ns, -d, kd, ks, shin, phys, valid)
             else:
                 color = kd
             deeper = depth < self.max_depth
+            blend = valid & (opac < 1.0) if (self.plan["transparency"] and deeper) else mi.Bool(False)
+            w_here = weight * dr.select(blend, opac, 1.0)
+            contribution = miss + dr.select(valid, w_here * color, 0.0)
+            children = []
             if self.plan["reflections"] and deeper:
                 refl = valid & dr.any(ks != 0.0)
-                if dr.any(refl):
-                    r = dr.normalize(d - 2.0 * dr.dot(d, ns) * ns)
-                    sub = self.trace(scene, sampler, si.spawn_ray(r), depth + 1, refl)
-                    color = dr.select(refl, color + ks * sub, color)
+                r = dr.normalize(d - 2.0 * dr.dot(d, ns) * ns)
+                if self.plan["glossy"]:
+                    for g, share in self._glossy_directions(sampler, r, shin, depth, refl):
+                        ok = refl & (dr.dot(g, ng) > 0.0)  # a ray into the surface sees no light
+                        children.append((self._spawn(si.p, err, ng, g), w_here * ks * share, ok))
+                else:
+                    children.append((self._spawn(si.p, err, ng, r), w_here * ks, refl))
             if self.plan["transparency"] and deeper:
-                see = valid & (opac < 1.0)
-                if dr.any(see):
-                    behind = self.trace(scene, sampler, si.spawn_ray(d), depth + 1, see)
-                    color = dr.select(see, opac * color + (1.0 - opac) * behind, color)
-            return dr.select(valid, color, result)
+                children.append((self._spawn(si.p, err, ng, d), weight * (1.0 - opac), blend))
+            return contribution, children
+
+        def set_pass_seed(self, seed: int):
+            """Seed of the samplers this integrator forks for secondary rays (one per render pass)."""
+            self.pass_seed = int(seed)
 
         def sample(self, scene, sampler, ray, medium=None, active=True):
-            L = self.trace(scene, sampler, mi.Ray3f(ray), 0, mi.Bool(active))
-            return mi.Spectrum(L), mi.Bool(active), []
+            self._prepare(scene)
+            if scalar:
+                return self._sample_scalar(scene, sampler, ray, active)
+            # Wavefront: every ray of one depth of the tree in one array (rays of one pixel may
+            # be several: glossy samples, reflection and transmission), shaded at once; the
+            # children of all lanes are compacted into the next depth's array. Contributions
+            # are summed per pixel on the host in float64, in lane order (deterministic).
+            n = dr.width(ray.o)
+            acc = np.zeros((n, 3), dtype=np.float64)
+            pix = dr.arange(mi.UInt32, n)
+            cur_ray, weight, act, smp = mi.Ray3f(ray), mi.Color3f(1.0), mi.Bool(active), sampler
+            for depth in range(self.max_depth + 1):
+                contribution, children = self._shade(scene, smp, cur_ray, weight, depth, act)
+                smp.schedule_state()
+                dr.eval(contribution, children)
+                m = dr.width(pix)
+                np.add.at(acc, pix.numpy(), _host3(contribution, m))
+                # Compact the children of every lane into the next depth's arrays (kept in Dr.Jit
+                # memory: arrays made from host buffers would change the kernels' alignment and
+                # defeat the kernel cache).
+                parts = []
+                for child_ray, child_w, child_mask in children:
+                    if dr.any(child_mask):
+                        idx = dr.compress(child_mask | dr.zeros(mi.Bool, m))
+                        parts.append((idx, child_ray, child_w))
+                if not parts:
+                    break
+                used = sum(dr.width(idx) for idx, _, _ in parts)
+                # At least two lanes: a one-lane array is compiled as a scalar, a new kernel.
+                total = max(used, 2)
+                o, dd, w = dr.zeros(mi.Point3f, total), dr.zeros(mi.Vector3f, total), dr.zeros(mi.Color3f, total)
+                nxt = dr.zeros(mi.UInt32, total)
+                offset = 0
+                for idx, child_ray, child_w in parts:
+                    at = dr.arange(mi.UInt32, dr.width(idx)) + offset
+                    dr.scatter(o, dr.gather(mi.Point3f, child_ray.o, idx), at)
+                    dr.scatter(dd, dr.gather(mi.Vector3f, child_ray.d, idx), at)
+                    dr.scatter(w, dr.gather(mi.Color3f, child_w, idx), at)
+                    dr.scatter(nxt, dr.gather(mi.UInt32, pix, idx), at)
+                    offset += dr.width(idx)
+                dr.eval(o, dd, w, nxt)
+                cur_ray, weight, pix = mi.Ray3f(o, dd), w, nxt
+                act = dr.arange(mi.UInt32, total) < used
+                # Mitsuba's independent sampler, forked and seeded for this depth's lanes
+                # (opaque: a literal seed would make every pass compile its own kernels).
+                smp = sampler.fork()
+                smp.seed(dr.opaque(mi.UInt32, _seed32(getattr(self, "pass_seed", 0), depth + 1)), total)
+            L = acc.astype(np.float32)
+            return mi.Spectrum(mi.Float(L[:, 0]), mi.Float(L[:, 1]), mi.Float(L[:, 2])), mi.Bool(active), []
+
+        def _sample_scalar(self, scene, sampler, ray, active):
+            """The same tree, one pixel at a time (scalar_rgb): a stack of nodes."""
+            total = mi.Color3f(0.0)
+            stack = [(mi.Ray3f(ray), mi.Color3f(1.0), 0, bool(active))]
+            while stack:
+                node_ray, weight, depth, act = stack.pop()
+                contribution, children = self._shade(scene, sampler, node_ray, weight, depth, act)
+                total += contribution
+                for child_ray, child_w, child_act in reversed(children):
+                    if child_act:
+                        stack.append((child_ray, child_w, depth + 1, True))
+            return mi.Spectrum(total), mi.Bool(active), []
 
         def aov_names(self):
             return []
@@ -259,8 +477,10 @@ def render(mi, scene, cfg: dict, seed: int, passes: int | None = None) -> np.nda
     acc = np.zeros((H, W, 3), dtype=np.float64)
     lens_on = cfg["plan"]["depth_of_field"]
     for p in range(passes):
-        s = p // dof  # camera sample index (each camera sample gets `dof` lens samples)
+        s = (p // dof) % spp  # camera sample index (each camera sample gets `dof` lens samples)
         stream = (seed * 1_000_003 + p) & 0x7FFFFFFF
+        if hasattr(integrator, "set_pass_seed"):
+            integrator.set_pass_seed(stream)
         if scalar:
             for y in range(H):
                 for x in range(W):
@@ -268,7 +488,7 @@ def render(mi, scene, cfg: dict, seed: int, passes: int | None = None) -> np.nda
                     L = _camera_sample(mi, sensor, integrator, scene, sampler, x, y, W, H, spp, s, k, square, lens_on)
                     acc[y, x] += np.array([L[0], L[1], L[2]], dtype=np.float64)
             continue
-        sampler.seed(stream, W * H)
+        sampler.seed(dr.opaque(mi.UInt32, _seed32(stream, 0)), W * H)
         idx = dr.arange(mi.UInt32, W * H)
         x, y = mi.Float(idx % W), mi.Float(idx // W)
         L = _camera_sample(mi, sensor, integrator, scene, sampler, x, y, W, H, spp, s, k, square, lens_on)

@@ -1,6 +1,7 @@
 //! Scenes: loading a scene file into the primitives, shading data, lights and
 //! camera that the renderer and every tracer use.
 
+pub mod digest;
 pub mod export;
 pub mod file;
 mod materials;

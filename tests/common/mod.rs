@@ -4,6 +4,8 @@
 
 #![allow(dead_code)]
 
+pub mod references;
+
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;

@@ -27,7 +27,7 @@ use glam::{Vec2, Vec3};
 use crate::error::{Error, Result};
 use crate::features::Plan;
 use crate::film::Image;
-use crate::geometry::offset::SpawnOffset;
+use crate::scene::digest::traced_sha256;
 use crate::scene::file::LightSpec;
 use crate::scene::{Overrides, Scene, SceneFile};
 use crate::shading::ShadingModelKind;
@@ -46,6 +46,8 @@ pub struct ExportReport {
     /// True when one Mitsuba sample per pixel reproduces rtdiff exactly
     /// (pixel centres, no area-light, lens or glossy sampling).
     pub deterministic: bool,
+    /// [`traced_sha256`] of the exported scene: what both renderers trace.
+    pub traced_sha256: String,
 }
 
 /// Load `scene_path` with `ov` (and every material switched to `model` when
@@ -87,7 +89,11 @@ pub fn export_mitsuba(scene: &Scene, lights: &[LightSpec], dir: &Path) -> Result
         return Err(Error::file(&scene.path, "light list does not match the loaded scene"));
     }
     let plan = scene.plan();
-    let mut report = ExportReport { deterministic: is_deterministic(scene, &plan), ..Default::default() };
+    let mut report = ExportReport {
+        deterministic: is_deterministic(scene, &plan),
+        traced_sha256: traced_sha256(scene),
+        ..Default::default()
+    };
     warn_unsupported(scene, &plan, &mut report.warnings);
     for sub in ["meshes", "textures"] {
         let p = dir.join(sub);
@@ -183,7 +189,10 @@ impl Shapes<'_> {
             let _ = writeln!(xml, "        <float name=\"radius\" value=\"{}\"/>", s.radius);
             write_bsdf(xml, self.scene.materials[material as usize].kd, None, false);
             let _ = writeln!(xml, "    </shape>");
-            self.json.push(serde_json::json!({ "id": id, "material": material }));
+            // The centre (and radius) give the sphere's hit-point error bound to the plugin's spawn rule.
+            self.json.push(serde_json::json!({
+                "id": id, "material": material, "center": [s.center.x, s.center.y, s.center.z], "radius": s.radius
+            }));
         }
     }
 
@@ -211,24 +220,11 @@ fn is_deterministic(scene: &Scene, plan: &Plan) -> bool {
 
 /// Name every construct whose Mitsuba rendering cannot equal rtdiff's.
 fn warn_unsupported(scene: &Scene, plan: &Plan, w: &mut Vec<String>) {
-    if plan.glossy {
-        w.push(
-            "glossy reflection (the reports' mirror ray perturbed in a square of side 1/shininess) has no Mitsuba \
-             equivalent: the Mitsuba integrator traces perfect mirrors"
-                .into(),
-        );
-    }
     if plan.bloom {
         w.push(
             "bloom is a post-process outside Mitsuba: compare the image before bloom (its oracle is OpenImageIO)"
                 .into(),
         );
-    }
-    if let SpawnOffset::Fixed { epsilon } = scene.params.ray_offset {
-        w.push(format!(
-            "params.ray_offset fixed epsilon {epsilon} has no Mitsuba equivalent: Mitsuba offsets rays by its own \
-             error estimate"
-        ));
     }
     if !plan.shading {
         w.push("shading is off: the Mitsuba integrator returns kd at the first hit, as rtdiff does".into());
@@ -395,12 +391,15 @@ fn sidecar(
         "seed": scene.seed,
         "mitsuba_spp": mitsuba_spp(scene, plan),
         "deterministic": report.deterministic,
+        "traced_sha256": report.traced_sha256,
         "background": a(scene.background),
         "plan": plan,
         "max_depth": p.max_depth,
         "light_samples": p.light_samples,
         "light_sampling": p.light_sampling,
         "dof_samples": if plan.depth_of_field { p.dof_samples } else { 1 },
+        "glossy_samples": p.glossy_samples,
+        "ray_offset": p.ray_offset,
         "materials": materials,
         "shapes": shapes,
         // The lights as the scene file gives them.
@@ -452,7 +451,8 @@ mod tests {
         let scene = Scene::load(&path).unwrap();
         let mut w = Vec::new();
         warn_unsupported(&scene, &scene.plan(), &mut w);
-        assert!(w.iter().any(|m| m.contains("glossy")), "{w:?}");
+        // Glossy reflection and the spawn rule are the plugin's; bloom is a post-process.
+        assert!(!w.iter().any(|m| m.contains("glossy")), "{w:?}");
         assert!(w.iter().any(|m| m.contains("bloom")), "{w:?}");
         assert!(!is_deterministic(&scene, &scene.plan()));
     }
