@@ -11,10 +11,10 @@ mod common;
 
 use std::sync::Arc;
 
-use common::{all_configs, cornell, load_mesh, parity_rays, spheres};
+use common::{cornell, load_mesh, spheres};
 use glam::Vec3;
 use rtdiff::accel::{BruteForce, Tracer};
-use rtdiff::backends::{AccelConfig, build_tracer};
+use rtdiff::backends::{AccelConfig, build_tracer, native_variants};
 use rtdiff::bvh::BvhTracer;
 use rtdiff::camera::Camera;
 use rtdiff::geometry::offset::SpawnOffset;
@@ -32,7 +32,7 @@ fn rays_for(prims: &Arc<Primitives>) -> Vec<Ray> {
     let shadow = rtdiff::rays::shadow_rays(prims, &camera, &hits, Vec3::new(-1.0, 1.0, -1.0), SpawnOffset::Robust);
     let mut rays = camera;
     rays.extend(shadow);
-    rays.extend(parity_rays(prims, 6_000, 17));
+    rays.extend(rtdiff::rays::mixed_rays(prims, 6_000, 17));
     rays
 }
 
@@ -54,7 +54,7 @@ fn check_scene(label: &str, prims: Primitives) {
         let brute = BruteForce::new(prims.clone(), test);
         let truth: Vec<Option<Hit>> = rays.iter().map(|r| brute.intersect(r)).collect();
         assert!(truth.iter().filter(|h| h.is_some()).count() > rays.len() / 5, "{label}: too few hits");
-        for cfg in all_configs() {
+        for cfg in native_variants() {
             let cfg = AccelConfig { triangle_test: test, ..cfg };
             check_batches(label, build_tracer(prims.clone(), &cfg).unwrap().as_ref(), &rays, &truth);
         }
