@@ -191,8 +191,8 @@ fn same_estimator_agrees(name: &str, rtdiff: &serde_json::Value, mitsuba: &serde
     assert!(mean.abs() < 1.6f64.log10(), "{name}: Mitsuba's relMSE is {}x rtdiff's on average", 10f64.powf(mean));
 }
 
-/// At 128 x 128 the area-light sweep's reference is reference/'s Mitsuba image (a mean of 16
-/// seeds, whose own noise is subtracted), and rtdiff's random light samples converge on it at
+/// At 128 x 128 the area-light sweep's reference is reference/'s Mitsuba image (a mean of the
+/// manifest's seeds, whose own noise is subtracted), and rtdiff's random light samples converge on it at
 /// the slope of an unbiased estimator: a bias between the renderers (a different light, a wrong
 /// shadow) would leave a floor and flatten the slope.
 #[test]
@@ -211,7 +211,17 @@ fn area_light_converges_on_the_mitsuba_reference() {
     let r = rtdiff::perf::convergence::run(&opts).unwrap();
     let c = &r.curves[0];
     assert_eq!(c.reference.source, ReferenceSource::Mitsuba, "{:?}", c.reference);
-    assert!(c.reference.description.contains("Mitsuba") && c.reference.description.contains("16 seeds"));
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(root.join("reference/manifest.json")).unwrap()).unwrap();
+    let seeds = manifest["references"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["name"] == "cornell_box_parallelogram_light")
+        .map(|e| e["seeds"].as_array().unwrap().len())
+        .unwrap();
+    let d = &c.reference.description;
+    assert!(d.contains("Mitsuba") && d.contains(&format!("mean of {seeds} seeds")), "{d}");
     assert!(matches!(c.mitsuba, MitsubaCurve::Missing { .. }));
     // The reference's noise: a few percent of the error at 256 samples, subtracted.
     let floor = c.reference.noise_floor.unwrap();
