@@ -134,7 +134,13 @@ fn race(args: &BenchArgs, rounds: usize) -> Result<()> {
         for s in &files {
             let prims = crate::rays::load_primitives(s, true)?;
             eprintln!("racing {} ...", s.display());
-            let m = crate::perf::race::race_bench_sets(&s.display().to_string(), &prims, opts.size, opts.incoherent, &ropts)?;
+            let m = crate::perf::race::race_bench_sets(
+                &s.display().to_string(),
+                &prims,
+                opts.size,
+                opts.incoherent,
+                &ropts,
+            )?;
             print_mesh_race(&m, rounds);
             meshes.push(m);
         }
