@@ -60,25 +60,23 @@ fn with_backend(scene: &Scene, b: Backend) -> AccelConfig {
     AccelConfig { backend: b, ..scene.accel }
 }
 
-/// Build and render `scene` with `cfg` on `threads` threads: seconds (CPU
-/// time of the process on one thread, wall clock on more).
+/// Build and render `scene` with `cfg` on `threads` threads: wall-clock
+/// seconds, on one thread too. The process's CPU time would also count
+/// worker threads that spin while idle (rayon's, and the TBB workers behind
+/// Embree's device): measured on all_features at 400x400, one thread, it gave
+/// Embree 2.65 s where `rtdiff render --tracer embree --threads 1` takes 1.37 s
+/// of wall clock and 1.36 s of user time, a 2x advantage to rtdiff that is
+/// not real. Rounds alternate the two tracers, so load from other processes
+/// falls on both.
 fn timed_render(scene: &Scene, cfg: &AccelConfig, threads: usize) -> Result<f64> {
     // The build runs on the render's threads too (Embree's device takes the pool's size).
-    let work = || -> Result<()> {
-        crate::render::with_threads(Some(threads), || -> Result<()> {
-            let tracer = build_tracer(scene.prims.clone(), cfg)?;
-            render(scene, tracer.as_ref(), &RenderOptions { threads: None, quiet: true })?;
-            Ok(())
-        })?
-    };
-    if threads == 1 {
-        let (t, r) = super::clock::process_cpu_seconds(work);
-        r.map(|()| t)
-    } else {
-        let start = Instant::now();
-        work()?;
-        Ok(start.elapsed().as_secs_f64())
-    }
+    let start = Instant::now();
+    crate::render::with_threads(Some(threads), || -> Result<()> {
+        let tracer = build_tracer(scene.prims.clone(), cfg)?;
+        render(scene, tracer.as_ref(), &RenderOptions { threads: None, quiet: true })?;
+        Ok(())
+    })??;
+    Ok(start.elapsed().as_secs_f64())
 }
 
 /// Race native against Embree on `scene_path`.
