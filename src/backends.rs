@@ -10,8 +10,8 @@ use std::sync::Arc;
 use clap::ValueEnum;
 use serde::{Deserialize, Serialize};
 
-pub use crate::bvh::config::{Builder, BvhConfig, Traversal};
-pub use crate::embree::quality::EmbreeQuality;
+pub use crate::bvh::config::{BinaryOrder, Builder, BvhConfig, NodeLayout, Traversal};
+pub use crate::embree::quality::{EmbreeMode, EmbreeQuality, embree_label};
 
 use crate::accel::{BruteForce, Tracer};
 use crate::error::Result;
@@ -38,7 +38,8 @@ pub struct AccelConfig {
     pub backend: Backend,
     /// BVH builder (native backend).
     pub builder: Builder,
-    /// BVH traversal (native backend).
+    /// BVH traversal (native backend): `fast` is the 8-wide node layout, the
+    /// others walk binary nodes ([`Traversal::layout`]).
     pub traversal: Traversal,
     /// Ray/triangle test (native and brute backends).
     pub triangle_test: TriangleTest,
@@ -46,15 +47,17 @@ pub struct AccelConfig {
     pub leaf_size: usize,
     /// Bin count for the `sah` builder.
     pub bins: usize,
-    /// Build quality of the Embree backend (always built with the robust flag).
+    /// Build quality of the Embree backend.
     pub embree_quality: EmbreeQuality,
+    /// Scene flags of the Embree backend (robust unless asked otherwise).
+    pub embree_mode: EmbreeMode,
 }
 
 impl From<&AccelConfig> for BvhConfig {
     fn from(c: &AccelConfig) -> Self {
         BvhConfig {
             builder: c.builder,
-            traversal: c.traversal,
+            layout: c.traversal.layout(),
             triangle_test: c.triangle_test,
             leaf_size: c.leaf_size,
             bins: c.bins,
@@ -75,7 +78,7 @@ impl AccelConfig {
         match self.backend {
             Backend::Native => self.bvh().label(),
             Backend::Brute => format!("brute{}", self.triangle_test.label_suffix()),
-            Backend::Embree => self.embree_quality.label(),
+            Backend::Embree => embree_label(self.embree_quality, self.embree_mode),
         }
     }
 }
@@ -90,17 +93,26 @@ impl Default for AccelConfig {
             leaf_size: 1,
             bins: 16,
             embree_quality: EmbreeQuality::High,
+            embree_mode: EmbreeMode::Robust,
         }
     }
 }
 
-/// Build the tracer `cfg` asks for over `prims`.
+/// Build the tracer `cfg` asks for over `prims`, with the threads of the
+/// calling rayon pool (every backend).
 pub fn build_tracer(prims: Arc<Primitives>, cfg: &AccelConfig) -> Result<Box<dyn Tracer>> {
     match cfg.backend {
         Backend::Brute => Ok(Box::new(BruteForce::new(prims, cfg.triangle_test))),
         Backend::Native => Ok(Box::new(crate::bvh::BvhTracer::new(&prims, cfg))),
         #[cfg(feature = "embree")]
-        Backend::Embree => Ok(Box::new(crate::embree::EmbreeTracer::new(prims, cfg.embree_quality)?)),
+        // Embree builds with as many threads as the calling rayon pool has,
+        // like rtdiff's own builders.
+        Backend::Embree => Ok(Box::new(crate::embree::EmbreeTracer::with_mode(
+            &crate::embree::Device::new(&format!("threads={}", rayon::current_num_threads()))?,
+            prims,
+            cfg.embree_quality,
+            cfg.embree_mode,
+        )?)),
         #[cfg(not(feature = "embree"))]
         Backend::Embree => Err(crate::error::Error::Invalid(
             "this build has no Embree backend: run scripts/setup-embree.sh and build with --features embree".into(),

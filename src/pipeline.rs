@@ -57,7 +57,8 @@ pub struct Rendered {
 /// Render `scene` to its final image with the tracer its `accel` asks for.
 pub fn render_scene(scene: &Scene, opts: &RenderOptions) -> Result<Rendered> {
     let t0 = Instant::now();
-    let tracer = build_tracer(scene.prims.clone(), &scene.accel)?;
+    // Built on the render's threads (`--threads`), whichever the backend.
+    let tracer = crate::render::with_threads(opts.threads, || build_tracer(scene.prims.clone(), &scene.accel))??;
     let build_ms = t0.elapsed().as_secs_f64() * 1e3;
     let mut out = render_with(scene, tracer.as_ref(), opts)?;
     out.stats.build_ms = build_ms;

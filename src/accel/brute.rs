@@ -4,7 +4,7 @@
 use std::sync::Arc;
 
 use crate::geometry::triangle::WatertightRay;
-use crate::geometry::{Hit, Primitives, Ray, TriangleTest};
+use crate::geometry::{Hit, Primitives, Ray, TriangleKernel, TriangleTest};
 
 use super::Tracer;
 
@@ -30,22 +30,32 @@ impl Tracer for BruteForce {
         if !ray.is_traceable() {
             return None;
         }
-        let wr = WatertightRay::new(ray.dir);
-        let mut r = *ray;
-        let mut best = None;
-        for i in 0..self.prims.len() {
-            if let Some((t, u, v)) = self.prims.intersect_prim(i, &r, &wr, self.test) {
-                Hit::offer(&mut best, &mut r, Hit { t, prim: i as u32, u, v });
-            }
-        }
-        best
+        crate::with_triangle_kernel!(self.test, K => closest::<K>(&self.prims, ray))
     }
 
     fn occluded(&self, ray: &Ray) -> bool {
         if !ray.is_traceable() {
             return false;
         }
-        let wr = WatertightRay::new(ray.dir);
-        (0..self.prims.len()).any(|i| self.prims.intersect_prim(i, ray, &wr, self.test).is_some())
+        crate::with_triangle_kernel!(self.test, K => any::<K>(&self.prims, ray))
     }
+}
+
+/// Closest hit over every primitive with the triangle test `K`.
+fn closest<K: TriangleKernel>(prims: &Primitives, ray: &Ray) -> Option<Hit> {
+    let wr = WatertightRay::new(ray.dir);
+    let mut r = *ray;
+    let mut best = None;
+    for i in 0..prims.len() {
+        if let Some((t, u, v)) = prims.intersect_prim_with::<K>(i, &r, &wr) {
+            Hit::offer(&mut best, &mut r, Hit { t, prim: i as u32, u, v });
+        }
+    }
+    best
+}
+
+/// Whether any primitive is hit, with the triangle test `K`.
+fn any<K: TriangleKernel>(prims: &Primitives, ray: &Ray) -> bool {
+    let wr = WatertightRay::new(ray.dir);
+    (0..prims.len()).any(|i| prims.intersect_prim_with::<K>(i, ray, &wr).is_some())
 }

@@ -23,4 +23,29 @@ pub trait Tracer: Send + Sync {
 
     /// True when any primitive is hit with `ray.t_min <= t <= ray.t_max`.
     fn occluded(&self, ray: &Ray) -> bool;
+
+    /// [`Tracer::intersect`] of every ray of `rays` into `out` (same length):
+    /// the same answers, ray for ray. Backends that trace coherent rays
+    /// faster together (packets) override it; callers with many rays at
+    /// once (a tile of camera rays, the shadow rays of a tile) use it.
+    ///
+    /// # Panics
+    /// When `out` and `rays` differ in length.
+    fn intersect_batch(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        assert_eq!(rays.len(), out.len(), "intersect_batch: one answer per ray");
+        for (r, o) in rays.iter().zip(out) {
+            *o = self.intersect(r);
+        }
+    }
+
+    /// [`Tracer::occluded`] of every ray of `rays` into `out` (same length).
+    ///
+    /// # Panics
+    /// When `out` and `rays` differ in length.
+    fn occluded_batch(&self, rays: &[Ray], out: &mut [bool]) {
+        assert_eq!(rays.len(), out.len(), "occluded_batch: one answer per ray");
+        for (r, o) in rays.iter().zip(out) {
+            *o = self.occluded(r);
+        }
+    }
 }

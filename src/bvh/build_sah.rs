@@ -171,6 +171,28 @@ impl Transposed {
     }
 }
 
+/// Nodes with at least this many primitives bin in parallel (when the pool has more than one thread).
+const PARALLEL_BINNING: usize = 1 << 16;
+
+/// Add the primitives of `refs` to the bins (`count`, `boxes`, bin-major:
+/// entry `3 k + a` is bin `k` of axis `a`).
+#[inline(always)]
+fn bin_into(refs: &[PrimRef], count: &mut [UVec4], boxes: &mut [BoxA], cmin: Vec3A, scale: Vec3A, lastf: Vec3A) {
+    let nb = count.len();
+    for r in refs {
+        let b = r.boxa();
+        let k = bins_of((b.min + b.max) * 0.5, cmin, scale, lastf);
+        for (a, &ka) in k.iter().enumerate() {
+            // bins_of returns values in 0..nb; the clamp only lets the
+            // compiler drop the bounds checks.
+            let ka = ka.min(nb - 1);
+            count[ka][a] += 1;
+            let j = 3 * ka + a;
+            boxes[j] = boxes[j].union(b);
+        }
+    }
+}
+
 impl SahSplit {
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
@@ -198,17 +220,28 @@ impl SahSplit {
         soa.resize(nb, Transposed::EMPTY);
         let lastf = Vec3A::splat(last as f32);
         let (count, boxes) = (&mut count[..nb], &mut boxes[..3 * nb]);
-        for r in idx.iter() {
-            let b = r.boxa();
-            let k = bins_of((b.min + b.max) * 0.5, cb.min, scale, lastf);
-            for (a, &ka) in k.iter().enumerate() {
-                // bins_of returns values in 0..nb; the clamp only lets the
-                // compiler drop the bounds checks.
-                let ka = ka.min(nb - 1);
-                count[ka][a] += 1;
-                let j = 3 * ka + a;
-                boxes[j] = boxes[j].union(b);
-            }
+        if n >= PARALLEL_BINNING && rayon::current_num_threads() > 1 {
+            // Large nodes (the top of the tree, which no fork shares out) bin
+            // in parallel chunks whose bins are then merged: counts add and
+            // boxes unite exactly, so the bins are those of one sequential pass.
+            use rayon::prelude::*;
+            let (c, b) = idx
+                .par_chunks(PARALLEL_BINNING / 4)
+                .map(|chunk| {
+                    let (mut c, mut b) = (vec![UVec4::ZERO; nb], vec![BoxA::EMPTY; 3 * nb]);
+                    bin_into(chunk, &mut c, &mut b, cb.min, scale, lastf);
+                    (c, b)
+                })
+                .reduce_with(|(mut c0, mut b0), (c1, b1)| {
+                    c0.iter_mut().zip(&c1).for_each(|(x, y)| *x += *y);
+                    b0.iter_mut().zip(&b1).for_each(|(x, y)| *x = x.union(*y));
+                    (c0, b0)
+                })
+                .expect("a node has primitives");
+            count.copy_from_slice(&c);
+            boxes.copy_from_slice(&b);
+        } else {
+            bin_into(idx, count, boxes, cb.min, scale, lastf);
         }
 
         // Best split: minimise A_l B(N_l) + A_r B(N_r) (the constant terms of

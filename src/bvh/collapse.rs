@@ -36,18 +36,31 @@ pub const MAX_LEAF: u32 = 8;
 /// Lanes a subtree may use, `1..=WIDTH`; index 0 is unused.
 type Row = [f32; WIDTH + 1];
 
+/// Subtrees of at least this many primitives are planned and emitted in
+/// parallel (when the rayon pool has more than one thread).
+const PARALLEL_THRESHOLD: u32 = 1 << 14;
+
+/// One binary node's entry of the dynamic-programming tables.
+#[derive(Clone, Copy)]
+struct Entry {
+    /// `cost[i]`: cheapest representation of the subtree in at most `i` lanes.
+    cost: Row,
+    /// `split[i]`: lanes given to the left child in the cheapest way to open
+    /// the subtree into its children's representations with at most `i` lanes.
+    split: [u8; WIDTH + 1],
+    /// A one-lane subtree is a leaf (else a wide node).
+    as_leaf: bool,
+    /// First primitive and primitive count of the subtree.
+    range: (u32, u32),
+}
+
+const EMPTY_ENTRY: Entry = Entry { cost: [0.0; WIDTH + 1], split: [0; WIDTH + 1], as_leaf: false, range: (0, 0) };
+
 /// The dynamic-programming tables of one binary tree.
 struct Plan<'a> {
     bin: &'a [Node],
-    /// `cost[n][i]`: cheapest representation of subtree `n` in at most `i` lanes.
-    cost: Vec<Row>,
-    /// `split[n][i]`: lanes given to the left child in the cheapest way to
-    /// open `n` into its children's representations with at most `i` lanes.
-    split: Vec<[u8; WIDTH + 1]>,
-    /// `as_leaf[n]`: a one-lane `n` is a leaf (else a wide node).
-    as_leaf: Vec<bool>,
-    /// First primitive and primitive count of each subtree.
-    range: Vec<(u32, u32)>,
+    /// Entry of each binary node.
+    t: Vec<Entry>,
 }
 
 /// Half surface area of a binary node's box.
@@ -56,92 +69,106 @@ fn half_area(n: &Node) -> f32 {
     n.bounds().surface_area() * 0.5
 }
 
+/// The entry of binary node `node` from its children's entries (`None` for a leaf).
+fn entry(node: &Node, children: Option<(&Entry, &Entry)>) -> Entry {
+    let area = half_area(node);
+    let Some((l, r)) = children else {
+        let c = PACKET_COST * packets_for(node.count) as f32 * area;
+        return Entry { cost: [c; WIDTH + 1], split: [0; WIDTH + 1], as_leaf: true, range: (node.offset, node.count) };
+    };
+    let range = (l.range.0, l.range.1 + r.range.1);
+    // dist[i]: both children in at most i lanes (each needs at least one).
+    let (cl, cr) = (l.cost, r.cost);
+    let mut dist = [f32::INFINITY; WIDTH + 1];
+    let mut split = [0u8; WIDTH + 1];
+    for i in 2..=WIDTH {
+        for j in 1..i {
+            let c = cl[j] + cr[i - j];
+            // `split[i] == 0`: take the first candidate even when every cost
+            // is infinite or NaN (box areas that overflow f32), so that
+            // `emit` always splits into 1..i lanes; a 0 here made it ask
+            // for lane count 0 and index `cost[n][0 - 1]`.
+            if c < dist[i] || split[i] == 0 {
+                dist[i] = c;
+                split[i] = j as u8;
+            }
+        }
+    }
+    let as_node = NODE_COST * area + dist[WIDTH];
+    let count = range.1;
+    let as_leaf = if count <= MAX_LEAF { PACKET_COST * packets_for(count) as f32 * area } else { f32::INFINITY };
+    let mut row = [0.0; WIDTH + 1];
+    row[1] = as_leaf.min(as_node);
+    for i in 2..=WIDTH {
+        // Opening n only pays when its children together are cheaper;
+        // otherwise the row keeps the cost of fewer lanes (see `emit`).
+        row[i] = dist[i].min(row[i - 1]);
+    }
+    Entry { cost: row, split, as_leaf: as_leaf <= as_node, range }
+}
+
+/// Fill `t`, the entries of the subtree of binary node `base` (the nodes
+/// `base .. base + t.len()`, depth-first), children before parents; the two
+/// subtrees of a large node in parallel.
+fn fill(bin: &[Node], base: usize, t: &mut [Entry]) {
+    let node = &bin[base];
+    if !node.is_leaf() && t.len() >= PARALLEL_THRESHOLD as usize && rayon::current_num_threads() > 1 {
+        let right = node.offset as usize;
+        let (head, rest) = t.split_at_mut(1);
+        let (lt, rt) = rest.split_at_mut(right - base - 1);
+        rayon::join(|| fill(bin, base + 1, lt), || fill(bin, right, rt));
+        head[0] = entry(node, Some((&lt[0], &rt[0])));
+        return;
+    }
+    // Depth-first order puts every child after its parent: a reverse sweep
+    // visits children first.
+    for k in (0..t.len()).rev() {
+        let n = &bin[base + k];
+        t[k] = if n.is_leaf() {
+            entry(n, None)
+        } else {
+            let (l, r) = (k + 1, n.offset as usize - base);
+            entry(n, Some((&t[l], &t[r])))
+        };
+    }
+}
+
 impl<'a> Plan<'a> {
     fn new(bin: &'a [Node]) -> Self {
-        let len = bin.len();
-        let mut plan = Plan {
-            bin,
-            cost: vec![[0.0; WIDTH + 1]; len],
-            split: vec![[0; WIDTH + 1]; len],
-            as_leaf: vec![false; len],
-            range: vec![(0, 0); len],
-        };
-        // Depth-first order puts every child after its parent: a reverse sweep
-        // visits children first.
-        for n in (0..len).rev() {
-            plan.fill(n);
+        let mut t = vec![EMPTY_ENTRY; bin.len()];
+        if !bin.is_empty() {
+            fill(bin, 0, &mut t);
         }
-        plan
+        Plan { bin, t }
     }
 
-    fn fill(&mut self, n: usize) {
+    /// Append the lanes representing subtree `n` in at most `i` lanes (wide
+    /// children as [`Lane::PENDING`], built by [`Self::build_node`]).
+    fn emit(&self, n: usize, i: usize, lanes: &mut Vec<Lane>) {
         let node = &self.bin[n];
-        let area = half_area(node);
-        if node.is_leaf() {
-            self.range[n] = (node.offset, node.count);
-            self.as_leaf[n] = true;
-            let c = PACKET_COST * packets_for(node.count) as f32 * area;
-            self.cost[n] = [c; WIDTH + 1];
-            return;
-        }
-        let (l, r) = (n + 1, node.offset as usize);
-        self.range[n] = (self.range[l].0, self.range[l].1 + self.range[r].1);
-        // dist[i]: both children in at most i lanes (each needs at least one).
-        let (cl, cr) = (self.cost[l], self.cost[r]);
-        let mut dist = [f32::INFINITY; WIDTH + 1];
-        let mut split = [0u8; WIDTH + 1];
-        for i in 2..=WIDTH {
-            for j in 1..i {
-                let c = cl[j] + cr[i - j];
-                // `split[i] == 0`: take the first candidate even when every cost
-                // is infinite or NaN (box areas that overflow f32), so that
-                // `emit` always splits into 1..i lanes; a 0 here made it ask
-                // for lane count 0 and index `cost[n][0 - 1]`.
-                if c < dist[i] || split[i] == 0 {
-                    dist[i] = c;
-                    split[i] = j as u8;
-                }
-            }
-        }
-        let as_node = NODE_COST * area + dist[WIDTH];
-        let count = self.range[n].1;
-        let as_leaf = if count <= MAX_LEAF { PACKET_COST * packets_for(count) as f32 * area } else { f32::INFINITY };
-        self.as_leaf[n] = as_leaf <= as_node;
-        let mut row = [0.0; WIDTH + 1];
-        row[1] = as_leaf.min(as_node);
-        for i in 2..=WIDTH {
-            // Opening n only pays when its children together are cheaper;
-            // otherwise the row keeps the cost of fewer lanes (see `emit`).
-            row[i] = dist[i].min(row[i - 1]);
-        }
-        self.cost[n] = row;
-        self.split[n] = split;
-    }
-
-    /// Append the lanes representing subtree `n` in at most `i` lanes.
-    fn emit(&self, n: usize, i: usize, lanes: &mut Vec<Lane>, out: &mut Vec<WideNode>) {
-        let node = &self.bin[n];
+        let e = &self.t[n];
         if i == 1 || node.is_leaf() {
-            if self.as_leaf[n] {
-                let (first, count) = self.range[n];
+            if e.as_leaf {
+                let (first, count) = e.range;
                 lanes.push(Lane { node: n, child: first, count });
             } else {
-                let c = self.build_node(n, out);
-                lanes.push(Lane { node: n, child: c, count: 0 });
+                lanes.push(Lane { node: n, child: Lane::PENDING, count: 0 });
             }
             return;
         }
-        if self.cost[n][i] == self.cost[n][i - 1] {
+        if e.cost[i] == e.cost[i - 1] {
             // Opening n into i lanes is no cheaper than using fewer.
-            self.emit(n, i - 1, lanes, out);
+            self.emit(n, i - 1, lanes);
         } else {
-            let j = self.split[n][i] as usize;
-            self.emit(n + 1, j, lanes, out);
-            self.emit(node.offset as usize, i - j, lanes, out);
+            let j = e.split[i] as usize;
+            self.emit(n + 1, j, lanes);
+            self.emit(node.offset as usize, i - j, lanes);
         }
     }
 
-    /// Make binary node `n` (interior) a wide node; returns its index.
+    /// Make binary node `n` a wide node at the end of `out`, followed by its
+    /// wide descendants depth-first; returns its index. Large subtrees build
+    /// their wide children in parallel.
     fn build_node(&self, n: usize, out: &mut Vec<WideNode>) -> u32 {
         let me = out.len();
         out.push(WideNode::EMPTY);
@@ -150,9 +177,38 @@ impl<'a> Plan<'a> {
         if node.is_leaf() {
             lanes.push(Lane { node: n, child: node.offset, count: node.count });
         } else {
-            let j = self.split[n][WIDTH] as usize;
-            self.emit(n + 1, j, &mut lanes, out);
-            self.emit(node.offset as usize, WIDTH - j, &mut lanes, out);
+            let j = self.t[n].split[WIDTH] as usize;
+            self.emit(n + 1, j, &mut lanes);
+            self.emit(node.offset as usize, WIDTH - j, &mut lanes);
+        }
+        let pending: Vec<usize> = (0..lanes.len()).filter(|&k| lanes[k].child == Lane::PENDING).collect();
+        if self.t[n].range.1 >= PARALLEL_THRESHOLD && pending.len() > 1 && rayon::current_num_threads() > 1 {
+            use rayon::prelude::*;
+            let subs: Vec<Vec<WideNode>> = pending
+                .par_iter()
+                .map(|&k| {
+                    let mut v = Vec::new();
+                    self.build_node(lanes[k].node, &mut v);
+                    v
+                })
+                .collect();
+            for (&k, sub) in pending.iter().zip(&subs) {
+                let base = out.len() as u32;
+                lanes[k].child = base;
+                out.extend(sub.iter().map(|w| {
+                    let mut w = *w;
+                    for l in 0..WIDTH {
+                        if w.count[l] == 0 && w.child[l] != u32::MAX {
+                            w.child[l] += base;
+                        }
+                    }
+                    w
+                }));
+            }
+        } else {
+            for &k in &pending {
+                lanes[k].child = self.build_node(lanes[k].node, out);
+            }
         }
         let mut w = WideNode::EMPTY;
         for (k, lane) in lanes.iter().enumerate() {
@@ -171,10 +227,16 @@ struct Lane {
     count: u32,
 }
 
+impl Lane {
+    /// The child of a wide-node lane whose node is not built yet.
+    const PENDING: u32 = u32::MAX;
+}
+
 /// Collapse binary `bin` (depth-first, as the builders make it) into wide
-/// nodes; node 0 is the root. Empty for an empty tree.
+/// nodes, depth-first; node 0 is the root. Empty for an empty tree. The
+/// result does not depend on the number of threads.
 pub fn collapse(bin: &[Node]) -> Vec<WideNode> {
-    let mut out = Vec::with_capacity(bin.len() / 4 + 1);
+    let mut out = super::huge::vec_with_capacity(bin.len() / 4 + 1);
     if !bin.is_empty() {
         Plan::new(bin).build_node(0, &mut out);
     }
@@ -261,5 +323,30 @@ mod tests {
         assert!(lanes as f64 / wide.len() as f64 > 4.0, "mean fill {}", lanes as f64 / wide.len() as f64);
         let max_leaf = wide.iter().flat_map(|w| w.count).max().unwrap_or(0);
         assert!(max_leaf > 1 && max_leaf <= MAX_LEAF);
+    }
+
+    /// The tree, its wide nodes and its leaf packets do not depend on the
+    /// number of threads that built them (the parallel binning, planning,
+    /// emitting and packing merge exactly).
+    #[test]
+    fn one_and_two_threads_build_the_same_tree() {
+        let prims = scattered(150_000, 4);
+        let build = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| crate::bvh::build_wide(&prims, &AccelConfig::default()))
+        };
+        let (a, b) = (build(1), build(2));
+        let bits = |w: &crate::bvh::WideBvh| -> Vec<u32> {
+            let nodes =
+                w.nodes.iter().flat_map(|n| n.b.iter().flatten().map(|f| f.to_bits()).chain(n.child).chain(n.count));
+            let packets = w
+                .packets
+                .iter()
+                .flat_map(|p| &p.packets)
+                .flat_map(|p| p.v.iter().flatten().map(|f| f.to_bits()).chain(p.id));
+            nodes.chain(packets).collect()
+        };
+        assert!(a.nodes.len() > 1000);
+        assert!(bits(&a) == bits(&b), "1 and 2 threads built different trees");
     }
 }

@@ -19,6 +19,7 @@ pub mod build_sah_volume;
 pub mod collapse;
 pub mod config;
 pub mod count;
+pub mod huge;
 pub mod node;
 pub mod packet;
 pub mod prims;
@@ -30,6 +31,7 @@ pub mod traverse_ordered;
 pub mod traverse_priority_queue;
 pub mod traverse_sorted_vector;
 pub mod wide;
+pub mod wide_packet;
 
 pub use build::BinaryBvh;
 pub use count::{Count, TraversalCounts, VisitLog};
@@ -38,10 +40,10 @@ pub use prims::LeafPrims;
 pub use stats::BvhStats;
 pub use wide::WideBvh;
 
-pub use config::{Builder, BvhConfig, Traversal};
+pub use config::{BinaryOrder, Builder, BvhConfig, NodeLayout, Traversal};
 
 use crate::accel::Tracer;
-use crate::geometry::{Hit, Primitives, Ray};
+use crate::geometry::{Hit, Primitives, Ray, TriangleKernel};
 
 /// Build a binary BVH over `prims` with the builder and parameters of `cfg`
 /// (`leaf_size` for `median`, `bins` for `sah`).
@@ -81,101 +83,112 @@ pub fn stats_for(prims: &Primitives, cfg: impl Into<BvhConfig>) -> BvhStats {
 /// The tree a [`BvhTracer`] walks.
 enum Tree {
     Binary(BinaryBvh),
-    Wide(WideBvh),
+    /// The 8-wide tree and the entry points chosen for it.
+    Wide(WideBvh, wide::Kernels),
 }
 
-/// A [`Tracer`] over rtdiff's BVH with a chosen builder and traversal.
+/// A [`Tracer`] over rtdiff's BVH with a chosen builder, node layout and triangle test.
 pub struct BvhTracer {
     tree: Tree,
     cfg: BvhConfig,
 }
 
 impl BvhTracer {
-    /// Build the BVH `cfg` asks for (the `fast` traversal also collapses it to 8-wide nodes).
+    /// Build the BVH `cfg` asks for (the 8-wide layout collapses the binary tree).
     pub fn new(prims: &Primitives, cfg: impl Into<BvhConfig>) -> Self {
         let cfg = cfg.into();
-        let tree = if cfg.traversal == Traversal::Fast {
-            Tree::Wide(build_wide(prims, cfg))
-        } else {
-            Tree::Binary(build_binary(prims, cfg))
+        let tree = match cfg.layout {
+            NodeLayout::Wide8 => {
+                let w = build_wide(prims, cfg);
+                let k = w.kernels(cfg.triangle_test);
+                Tree::Wide(w, k)
+            }
+            NodeLayout::Binary(_) => Tree::Binary(build_binary(prims, cfg)),
         };
         Self { tree, cfg }
     }
 
-    /// Use the portable scalar box test in the `fast` traversal even when AVX2 is available.
+    /// Use the portable scalar code in the 8-wide traversal even when AVX2 is available.
     pub fn force_scalar(&mut self) {
-        if let Tree::Wide(w) = &mut self.tree {
+        if let Tree::Wide(w, k) = &mut self.tree {
             w.set_scalar();
+            *k = w.kernels(self.cfg.triangle_test);
         }
     }
-}
 
-impl BvhTracer {
-    /// The binary tree walked by the reports' traversals (None for `fast`).
+    /// The binary tree walked by the reports' traversals (None for the 8-wide layout).
     pub fn binary(&self) -> Option<&BinaryBvh> {
         match &self.tree {
             Tree::Binary(b) => Some(b),
-            Tree::Wide(_) => None,
+            Tree::Wide(..) => None,
         }
     }
 
-    /// The 8-wide tree walked by the `fast` traversal (None otherwise).
+    /// The 8-wide tree (None for the binary layouts).
     pub fn wide(&self) -> Option<&WideBvh> {
         match &self.tree {
-            Tree::Wide(w) => Some(w),
+            Tree::Wide(w, _) => Some(w),
             Tree::Binary(_) => None,
         }
     }
 
     /// [`Tracer::intersect`] reporting the ray and the traversal's work to
     /// `counts` (the same traversal code; `()` counts nothing).
-    #[inline]
     pub fn intersect_with<C: Count>(&self, ray: &Ray, counts: &mut C) -> Option<Hit> {
         counts.ray();
         if !ray.is_traceable() {
             return None;
         }
-        let t = self.cfg.triangle_test;
         match &self.tree {
-            Tree::Wide(w) => w.intersect_counting(ray, t, counts),
-            Tree::Binary(b) => match self.cfg.traversal {
-                Traversal::Basic | Traversal::Fast => traverse_basic::intersect_counting(b, ray, t, counts),
-                Traversal::PriorityQueue => {
-                    traverse_ordered::intersect_counting::<traverse_priority_queue::HeapFrontier, C>(b, ray, t, counts)
-                }
-                Traversal::SortedVector => {
-                    traverse_ordered::intersect_counting::<traverse_sorted_vector::SortedFrontier, C>(b, ray, t, counts)
-                }
-                Traversal::NthElement => {
-                    traverse_ordered::intersect_counting::<traverse_nth_element::NthFrontier, C>(b, ray, t, counts)
-                }
-            },
+            Tree::Wide(w, _) => w.intersect_counting(ray, self.cfg.triangle_test, counts),
+            Tree::Binary(b) => {
+                crate::with_triangle_kernel!(self.cfg.triangle_test, K => binary_closest::<K, C>(b, self.order(), ray, counts))
+            }
         }
     }
 
     /// [`Tracer::occluded`] reporting the ray and the traversal's work to `counts`.
-    #[inline]
     pub fn occluded_with<C: Count>(&self, ray: &Ray, counts: &mut C) -> bool {
         counts.ray();
         if !ray.is_traceable() {
             return false;
         }
-        let t = self.cfg.triangle_test;
         match &self.tree {
-            Tree::Wide(w) => w.occluded_counting(ray, t, counts),
-            Tree::Binary(b) => match self.cfg.traversal {
-                Traversal::Basic | Traversal::Fast => traverse_basic::occluded_counting(b, ray, t, counts),
-                Traversal::PriorityQueue => {
-                    traverse_ordered::occluded_counting::<traverse_priority_queue::HeapFrontier, C>(b, ray, t, counts)
-                }
-                Traversal::SortedVector => {
-                    traverse_ordered::occluded_counting::<traverse_sorted_vector::SortedFrontier, C>(b, ray, t, counts)
-                }
-                Traversal::NthElement => {
-                    traverse_ordered::occluded_counting::<traverse_nth_element::NthFrontier, C>(b, ray, t, counts)
-                }
-            },
+            Tree::Wide(w, _) => w.occluded_counting(ray, self.cfg.triangle_test, counts),
+            Tree::Binary(b) => {
+                crate::with_triangle_kernel!(self.cfg.triangle_test, K => binary_any::<K, C>(b, self.order(), ray, counts))
+            }
         }
+    }
+
+    /// The walk order of a binary layout.
+    fn order(&self) -> BinaryOrder {
+        match self.cfg.layout {
+            NodeLayout::Binary(o) => o,
+            NodeLayout::Wide8 => BinaryOrder::DepthFirst,
+        }
+    }
+}
+
+/// Closest hit in a binary tree walked in `order`, triangle test `K`.
+fn binary_closest<K: TriangleKernel, C: Count>(b: &BinaryBvh, order: BinaryOrder, ray: &Ray, c: &mut C) -> Option<Hit> {
+    use traverse_ordered::intersect_counting as ordered;
+    match order {
+        BinaryOrder::DepthFirst => traverse_basic::intersect_counting::<K, C>(b, ray, c),
+        BinaryOrder::PriorityQueue => ordered::<traverse_priority_queue::HeapFrontier, K, C>(b, ray, c),
+        BinaryOrder::SortedVector => ordered::<traverse_sorted_vector::SortedFrontier, K, C>(b, ray, c),
+        BinaryOrder::NthElement => ordered::<traverse_nth_element::NthFrontier, K, C>(b, ray, c),
+    }
+}
+
+/// Any hit in a binary tree walked in `order`, triangle test `K`.
+fn binary_any<K: TriangleKernel, C: Count>(b: &BinaryBvh, order: BinaryOrder, ray: &Ray, c: &mut C) -> bool {
+    use traverse_ordered::occluded_counting as ordered;
+    match order {
+        BinaryOrder::DepthFirst => traverse_basic::occluded_counting::<K, C>(b, ray, c),
+        BinaryOrder::PriorityQueue => ordered::<traverse_priority_queue::HeapFrontier, K, C>(b, ray, c),
+        BinaryOrder::SortedVector => ordered::<traverse_sorted_vector::SortedFrontier, K, C>(b, ray, c),
+        BinaryOrder::NthElement => ordered::<traverse_nth_element::NthFrontier, K, C>(b, ray, c),
     }
 }
 
@@ -184,11 +197,50 @@ impl Tracer for BvhTracer {
         self.cfg.label()
     }
 
+    #[inline]
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        self.intersect_with(ray, &mut ())
+        match &self.tree {
+            Tree::Wide(w, k) => {
+                if !ray.is_traceable() {
+                    return None;
+                }
+                k.closest(w, ray)
+            }
+            Tree::Binary(_) => self.intersect_with(ray, &mut ()),
+        }
     }
 
+    #[inline]
     fn occluded(&self, ray: &Ray) -> bool {
-        self.occluded_with(ray, &mut ())
+        match &self.tree {
+            Tree::Wide(w, k) => ray.is_traceable() && k.any(w, ray),
+            Tree::Binary(_) => self.occluded_with(ray, &mut ()),
+        }
+    }
+
+    /// Packets of eight rays through the 8-wide tree ([`wide_packet`]); ray by ray on binary layouts.
+    fn intersect_batch(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        match &self.tree {
+            Tree::Wide(w, k) => k.closest_batch(w, rays, out),
+            Tree::Binary(_) => {
+                assert_eq!(rays.len(), out.len(), "intersect_batch: one answer per ray");
+                for (r, o) in rays.iter().zip(out) {
+                    *o = self.intersect_with(r, &mut ());
+                }
+            }
+        }
+    }
+
+    /// Packets of eight rays through the 8-wide tree; ray by ray on binary layouts.
+    fn occluded_batch(&self, rays: &[Ray], out: &mut [bool]) {
+        match &self.tree {
+            Tree::Wide(w, k) => k.any_batch(w, rays, out),
+            Tree::Binary(_) => {
+                assert_eq!(rays.len(), out.len(), "occluded_batch: one answer per ray");
+                for (r, o) in rays.iter().zip(out) {
+                    *o = self.occluded_with(r, &mut ());
+                }
+            }
+        }
     }
 }

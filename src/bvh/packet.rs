@@ -15,8 +15,8 @@
 use glam::Vec3;
 
 use crate::geometry::offset::gamma;
-use crate::geometry::triangle::{SIGN_MARGIN, WatertightRay, intersect_moller_trumbore};
-use crate::geometry::{Hit, Ray, TriangleTest};
+use crate::geometry::triangle::{SIGN_MARGIN, TriangleKernel, WatertightRay};
+use crate::geometry::{Hit, Ray};
 
 use super::prims::{LeafPrims, watertight};
 
@@ -54,6 +54,25 @@ pub struct TriPackets {
     pub packets: Vec<Tri4>,
 }
 
+/// Packet `c` of the leaf of triangles `first .. first + count`, where
+/// `tri(k)` gives the vertices and id of leaf slot `k`; lanes past the leaf's
+/// end repeat its last triangle.
+#[inline]
+pub fn leaf_packet(first: u32, count: u32, c: usize, tri: &impl Fn(usize) -> ([Vec3; 3], u32)) -> Tri4 {
+    let (first, count) = (first as usize, count as usize);
+    let mut p = Tri4 { v: [[0.0; PW]; 9], id: [0; PW] };
+    for l in 0..PW {
+        let (v, id) = tri(first + (PW * c + l).min(count - 1));
+        for (j, vj) in v.iter().enumerate() {
+            for a in 0..3 {
+                p.v[3 * j + a][l] = vj[a];
+            }
+        }
+        p.id[l] = id;
+    }
+    p
+}
+
 /// Packets holding `count` triangles.
 #[inline(always)]
 pub fn packets_for(count: u32) -> usize {
@@ -73,19 +92,8 @@ impl TriPackets {
     #[inline]
     pub fn push_leaf_with(&mut self, first: u32, count: u32, tri: impl Fn(usize) -> ([Vec3; 3], u32)) -> u32 {
         let start = self.packets.len() as u32;
-        let (first, count) = (first as usize, count as usize);
-        for c in (0..count).step_by(PW) {
-            let mut p = Tri4 { v: [[0.0; PW]; 9], id: [0; PW] };
-            for l in 0..PW {
-                let (v, id) = tri(first + (c + l).min(count - 1));
-                for (j, vj) in v.iter().enumerate() {
-                    for a in 0..3 {
-                        p.v[3 * j + a][l] = vj[a];
-                    }
-                }
-                p.id[l] = id;
-            }
-            self.packets.push(p);
+        for c in 0..packets_for(count) {
+            self.packets.push(leaf_packet(first, count, c, &tri));
         }
         start
     }
@@ -104,53 +112,44 @@ impl TriPackets {
     }
 
     /// Scalar closest-hit test of a leaf (`count` triangles from packet
-    /// `first`), with [`LeafPrims::intersect_leaf`]'s tie rule and `t_max`
-    /// update. Returns true when `best` changed.
+    /// `first`) with the triangle test `K`, with [`LeafPrims::intersect_leaf`]'s
+    /// tie rule and `t_max` update. Returns true when `best` changed.
     #[inline(always)]
-    pub fn intersect_leaf_scalar(
+    pub fn intersect_leaf_scalar<K: TriangleKernel>(
         &self,
         first: u32,
         count: u32,
         ray: &mut Ray,
         wr: &WatertightRay,
-        test: TriangleTest,
         best: &mut Option<Hit>,
     ) -> bool {
         let mut changed = false;
         for k in 0..count as usize {
             let ([a, b, c], id) = self.tri(first, k);
-            let hit = match test {
-                TriangleTest::Watertight => watertight(ray, wr, a, b, c),
-                TriangleTest::MollerTrumbore => intersect_moller_trumbore(ray, a, b, c),
-            };
-            if let Some((t, u, v)) = hit {
+            if let Some((t, u, v)) = K::intersect(ray, wr, a, b, c) {
                 changed |= offer(best, ray, t, id, u, v);
             }
         }
         changed
     }
 
-    /// Scalar any-hit test of a leaf.
+    /// Scalar any-hit test of a leaf with the triangle test `K`.
     #[inline(always)]
-    pub fn occluded_leaf_scalar(
+    pub fn occluded_leaf_scalar<K: TriangleKernel>(
         &self,
         first: u32,
         count: u32,
         ray: &Ray,
         wr: &WatertightRay,
-        test: TriangleTest,
     ) -> bool {
         (0..count as usize).any(|k| {
             let ([a, b, c], _) = self.tri(first, k);
-            match test {
-                TriangleTest::Watertight => watertight(ray, wr, a, b, c).is_some(),
-                TriangleTest::MollerTrumbore => intersect_moller_trumbore(ray, a, b, c).is_some(),
-            }
+            K::intersect(ray, wr, a, b, c).is_some()
         })
     }
 
     /// SIMD watertight closest-hit test of a leaf; same results as
-    /// [`Self::intersect_leaf_scalar`] with [`TriangleTest::Watertight`].
+    /// [`Self::intersect_leaf_scalar`] with the watertight test.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     pub fn intersect_leaf_simd(

@@ -3,8 +3,8 @@
 
 use glam::Vec3;
 
-use crate::geometry::triangle::{WatertightRay, intersect_moller_trumbore};
-use crate::geometry::{Hit, Prim, Primitives, Ray, Sphere, TriangleTest};
+use crate::geometry::triangle::WatertightRay;
+use crate::geometry::{Hit, Prim, Primitives, Ray, Sphere, TriangleKernel};
 
 /// One primitive in leaf order: its data and its original id, 40 bytes,
 /// so a leaf's primitives are read as one contiguous stream.
@@ -30,6 +30,10 @@ pub struct LeafPrims {
     pub entries: Vec<LeafEntry>,
     /// Number of triangles in the original primitive list.
     pub num_triangles: u32,
+    /// The spheres in id order (sphere `i` is primitive `num_triangles + i`):
+    /// the leaf loops offer sphere hits by distance alone, and [`Self::finish`]
+    /// adds the winner's `(u, v)`.
+    pub spheres: Vec<Sphere>,
 }
 
 impl LeafPrims {
@@ -47,7 +51,20 @@ impl LeafPrims {
                 LeafEntry { v, id }
             })
             .collect();
-        Self { entries, num_triangles: nt as u32 }
+        Self { entries, num_triangles: nt as u32, spheres: prims.spheres.clone() }
+    }
+
+    /// The closest hit `hit` of `ray` as the traversals return it: a sphere
+    /// hit gets its `(u, v)` here, computed once for the winner (the leaf
+    /// loops offered it by distance; the tie rule looks at nothing else), with
+    /// the bits [`Sphere::intersect`] gives.
+    #[inline]
+    pub fn finish(&self, hit: Option<Hit>, ray: &Ray) -> Option<Hit> {
+        let mut h = hit?;
+        if let Some(s) = h.prim.checked_sub(self.num_triangles).and_then(|i| self.spheres.get(i as usize)) {
+            (h.u, h.v) = s.uv_at(ray, h.t);
+        }
+        Some(h)
     }
 
     /// Number of entries.
@@ -66,17 +83,16 @@ impl LeafPrims {
     }
 
     /// Intersect entry `k`: exactly the computation of [`Primitives::intersect_prim`]
-    /// on the same primitive, so results are bit-identical to brute force.
+    /// on the same primitive, so results are bit-identical to brute force
+    /// (a sphere's `(u, v)` are left 0 for [`Self::finish`]).
     #[inline(always)]
-    pub fn intersect(&self, k: usize, ray: &Ray, wr: &WatertightRay, test: TriangleTest) -> Option<(f32, f32, f32)> {
+    pub fn intersect<K: TriangleKernel>(&self, k: usize, ray: &Ray, wr: &WatertightRay) -> Option<(f32, f32, f32)> {
         let e = &self.entries[k];
         if e.id < self.num_triangles {
-            match test {
-                TriangleTest::Watertight => watertight(ray, wr, e.v[0], e.v[1], e.v[2]),
-                TriangleTest::MollerTrumbore => intersect_moller_trumbore(ray, e.v[0], e.v[1], e.v[2]),
-            }
+            K::intersect(ray, wr, e.v[0], e.v[1], e.v[2])
         } else {
-            Sphere { center: e.v[0], radius: e.v[1].x }.intersect(ray)
+            // Distance only: `finish` adds the winner's (u, v).
+            Sphere { center: e.v[0], radius: e.v[1].x }.intersect_t(ray).map(|t| (t, 0.0, 0.0))
         }
     }
 
@@ -87,18 +103,17 @@ impl LeafPrims {
     /// the best distance (the interval is closed, so equal-distance hits are
     /// still reported and compared by id). Returns true when `best` changed.
     #[inline(always)]
-    pub fn intersect_leaf(
+    pub fn intersect_leaf<K: TriangleKernel>(
         &self,
         first: u32,
         count: u32,
         ray: &mut Ray,
         wr: &WatertightRay,
-        test: TriangleTest,
         best: &mut Option<Hit>,
     ) -> bool {
         let mut changed = false;
         for k in first as usize..(first + count) as usize {
-            if let Some((t, u, v)) = self.intersect(k, ray, wr, test) {
+            if let Some((t, u, v)) = self.intersect::<K>(k, ray, wr) {
                 let id = self.entries[k].id;
                 changed |= Hit::offer(best, ray, Hit { t, prim: id, u, v });
             }
@@ -108,8 +123,8 @@ impl LeafPrims {
 
     /// Any-hit test of entries `first .. first + count`.
     #[inline(always)]
-    pub fn occluded_leaf(&self, first: u32, count: u32, ray: &Ray, wr: &WatertightRay, test: TriangleTest) -> bool {
-        (first as usize..(first + count) as usize).any(|k| self.intersect(k, ray, wr, test).is_some())
+    pub fn occluded_leaf<K: TriangleKernel>(&self, first: u32, count: u32, ray: &Ray, wr: &WatertightRay) -> bool {
+        (first as usize..(first + count) as usize).any(|k| self.intersect::<K>(k, ray, wr).is_some())
     }
 }
 

@@ -4,7 +4,7 @@
 //! closer hits are found.
 
 use crate::geometry::triangle::WatertightRay;
-use crate::geometry::{Hit, Ray, TriangleTest};
+use crate::geometry::{Hit, Ray, TriangleKernel, TriangleTest};
 
 use super::BinaryBvh;
 use super::count::Count;
@@ -15,12 +15,12 @@ pub(crate) const STACK: usize = 128;
 
 /// Closest hit by depth-first traversal.
 pub fn intersect(bvh: &BinaryBvh, ray: &Ray, test: TriangleTest) -> Option<Hit> {
-    intersect_counting(bvh, ray, test, &mut ())
+    crate::with_triangle_kernel!(test, K => intersect_counting::<K, ()>(bvh, ray, &mut ()))
 }
 
 /// [`intersect`] reporting every box test, leaf test and closer hit to `counts`.
 #[inline(always)]
-pub fn intersect_counting<C: Count>(bvh: &BinaryBvh, ray: &Ray, test: TriangleTest, counts: &mut C) -> Option<Hit> {
+pub fn intersect_counting<K: TriangleKernel, C: Count>(bvh: &BinaryBvh, ray: &Ray, counts: &mut C) -> Option<Hit> {
     if bvh.nodes.is_empty() {
         return None;
     }
@@ -40,7 +40,7 @@ pub fn intersect_counting<C: Count>(bvh: &BinaryBvh, ray: &Ray, test: TriangleTe
         }
         if node.is_leaf() {
             counts.leaf(i, node.count);
-            if bvh.prims.intersect_leaf(node.offset, node.count, &mut r, &wr, test, &mut best) {
+            if bvh.prims.intersect_leaf::<K>(node.offset, node.count, &mut r, &wr, &mut best) {
                 counts.closer();
             }
         } else {
@@ -50,17 +50,17 @@ pub fn intersect_counting<C: Count>(bvh: &BinaryBvh, ray: &Ray, test: TriangleTe
             sp += 2;
         }
     }
-    best
+    bvh.prims.finish(best, ray)
 }
 
 /// Any hit by depth-first traversal.
 pub fn occluded(bvh: &BinaryBvh, ray: &Ray, test: TriangleTest) -> bool {
-    occluded_counting(bvh, ray, test, &mut ())
+    crate::with_triangle_kernel!(test, K => occluded_counting::<K, ()>(bvh, ray, &mut ()))
 }
 
 /// [`occluded`] reporting every box test and leaf test to `counts`.
 #[inline(always)]
-pub fn occluded_counting<C: Count>(bvh: &BinaryBvh, ray: &Ray, test: TriangleTest, counts: &mut C) -> bool {
+pub fn occluded_counting<K: TriangleKernel, C: Count>(bvh: &BinaryBvh, ray: &Ray, counts: &mut C) -> bool {
     if bvh.nodes.is_empty() {
         return false;
     }
@@ -79,7 +79,7 @@ pub fn occluded_counting<C: Count>(bvh: &BinaryBvh, ray: &Ray, test: TriangleTes
         }
         if node.is_leaf() {
             counts.leaf(i, node.count);
-            if bvh.prims.occluded_leaf(node.offset, node.count, ray, &wr, test) {
+            if bvh.prims.occluded_leaf::<K>(node.offset, node.count, ray, &wr) {
                 return true;
             }
         } else {

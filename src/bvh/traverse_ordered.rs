@@ -4,7 +4,7 @@
 //! closest hit found so far. The variants differ only in the frontier.
 
 use crate::geometry::triangle::WatertightRay;
-use crate::geometry::{Hit, Ray, TriangleTest};
+use crate::geometry::{Hit, Ray, TriangleKernel, TriangleTest};
 
 use super::BinaryBvh;
 use super::count::Count;
@@ -22,15 +22,14 @@ pub trait Frontier: Default {
 
 /// Closest hit, expanding boxes nearest-first from frontier `F`.
 pub fn intersect<F: Frontier>(bvh: &BinaryBvh, ray: &Ray, test: TriangleTest) -> Option<Hit> {
-    intersect_counting::<F, ()>(bvh, ray, test, &mut ())
+    crate::with_triangle_kernel!(test, K => intersect_counting::<F, K, ()>(bvh, ray, &mut ()))
 }
 
 /// [`intersect`] reporting every box test, leaf test and closer hit to `counts`.
 #[inline(always)]
-pub fn intersect_counting<F: Frontier, C: Count>(
+pub fn intersect_counting<F: Frontier, K: TriangleKernel, C: Count>(
     bvh: &BinaryBvh,
     ray: &Ray,
-    test: TriangleTest,
     counts: &mut C,
 ) -> Option<Hit> {
     let root = bvh.nodes.first()?;
@@ -51,7 +50,7 @@ pub fn intersect_counting<F: Frontier, C: Count>(
         let node = &bvh.nodes[i as usize];
         if node.is_leaf() {
             counts.leaf(i, node.count);
-            if bvh.prims.intersect_leaf(node.offset, node.count, &mut r, &wr, test, &mut best) {
+            if bvh.prims.intersect_leaf::<K>(node.offset, node.count, &mut r, &wr, &mut best) {
                 counts.closer();
             }
         } else {
@@ -65,22 +64,17 @@ pub fn intersect_counting<F: Frontier, C: Count>(
             f.settle();
         }
     }
-    best
+    bvh.prims.finish(best, ray)
 }
 
 /// Any hit, visiting boxes in the same order (stops at the first hit).
 pub fn occluded<F: Frontier>(bvh: &BinaryBvh, ray: &Ray, test: TriangleTest) -> bool {
-    occluded_counting::<F, ()>(bvh, ray, test, &mut ())
+    crate::with_triangle_kernel!(test, K => occluded_counting::<F, K, ()>(bvh, ray, &mut ()))
 }
 
 /// [`occluded`] reporting every box test and leaf test to `counts`.
 #[inline(always)]
-pub fn occluded_counting<F: Frontier, C: Count>(
-    bvh: &BinaryBvh,
-    ray: &Ray,
-    test: TriangleTest,
-    counts: &mut C,
-) -> bool {
+pub fn occluded_counting<F: Frontier, K: TriangleKernel, C: Count>(bvh: &BinaryBvh, ray: &Ray, counts: &mut C) -> bool {
     let Some(root) = bvh.nodes.first() else { return false };
     let pre = RayPre::new(ray);
     let wr = WatertightRay::new(ray.dir);
@@ -94,7 +88,7 @@ pub fn occluded_counting<F: Frontier, C: Count>(
         let node = &bvh.nodes[i as usize];
         if node.is_leaf() {
             counts.leaf(i, node.count);
-            if bvh.prims.occluded_leaf(node.offset, node.count, ray, &wr, test) {
+            if bvh.prims.occluded_leaf::<K>(node.offset, node.count, ray, &wr) {
                 return true;
             }
         } else {

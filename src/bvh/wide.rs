@@ -1,19 +1,27 @@
-//! The production path (`fast` traversal): the binary BVH collapsed into
-//! 8-wide nodes whose eight child boxes are tested at once (AVX2 when the CPU
-//! has it, detected at run time, with a portable scalar fallback of identical
-//! semantics), nearest-first order, early termination against the closest hit
-//! so far, a precomputed reciprocal direction, and an any-hit variant for
-//! shadow rays.
+//! The production layout ([`super::config::NodeLayout::Wide8`], the `fast`
+//! traversal): the binary BVH collapsed into 8-wide nodes whose eight child
+//! boxes are tested at once (AVX2 when the CPU has it, with a portable scalar
+//! fallback of identical semantics), nearest-first order, early termination
+//! against the closest hit so far, and an any-hit variant for shadow rays.
+//!
+//! Leaf triangles sit in 4-wide packets ([`super::packet`]); leaves that hold
+//! spheres keep [`LeafPrims`] entries instead (flag [`ENTRY_LEAF`]), so a
+//! scene with one sphere still tests its triangles four at a time.
+//!
+//! Everything a query needs to choose (triangle test, instruction set, stack
+//! size) is chosen once, when the tree is built: [`WideBvh::kernels`] returns
+//! the monomorphised entry points, and the loops below contain no runtime
+//! choice of triangle test.
 
 use std::mem::MaybeUninit;
 
 use glam::Vec3;
 
-use crate::geometry::triangle::WatertightRay;
+use crate::geometry::triangle::{TriangleKernel, WatertightRay};
 use crate::geometry::{Hit, Primitives, Ray, TriangleTest};
 
 use super::build::BuiltTree;
-use super::packet::TriPackets;
+use super::packet::{TriPackets, packets_for};
 use super::slab::{cull_bound, far_scale};
 use super::{BinaryBvh, LeafPrims, Node};
 
@@ -22,30 +30,36 @@ pub use super::count::{Count, TraversalCounts};
 /// Children per wide node.
 pub const WIDTH: usize = 8;
 
-/// Traversal stack entries for any tree: at most `WIDTH` pending entries per
-/// level and at most 100 levels (every builder caps the binary depth, and
+/// Flag of a leaf lane's `count` whose primitives are [`LeafPrims`] entries
+/// `child .. child + (count & !ENTRY_LEAF)` (a leaf holding a sphere) rather
+/// than triangle packets.
+pub const ENTRY_LEAF: u32 = 1 << 31;
+
+/// Traversal stack entries for any tree: at most `WIDTH - 1` pending entries
+/// per level and at most 100 levels (every builder caps the binary depth, and
 /// collapsing never deepens the tree).
 const STACK: usize = 1024;
-/// Stack entries for trees of at most `SHALLOW_STACK / WIDTH` levels (every
-/// mesh tested here): the closest-hit stack then stays under a 4 KiB page,
-/// so a call needs no stack probes and touches fewer cache lines, which
-/// matters for rays that miss everything.
-const SHALLOW_STACK: usize = 288;
+/// Stack entries for trees of at most `SHALLOW_STACK / (WIDTH - 1)` levels
+/// (27 wide levels, about 80 binary ones: every mesh tested here): the
+/// closest-hit frame then stays under a 4 KiB page, so a call needs no stack
+/// probe and touches fewer cache lines, which matters for rays that miss.
+const SHALLOW_STACK: usize = 189;
 
 /// An 8-wide node: child boxes in structure-of-arrays form for SIMD tests.
 ///
 /// 256 bytes (32 per child). Lane `i` is empty when `child[i] == u32::MAX`
 /// (its box is inverted, `min = +inf`, `max = -inf`, so no ray hits it), an
-/// inner node `child[i]` when `count[i] == 0`, or a leaf over the reordered
-/// primitives `child[i] .. child[i] + count[i]`.
+/// inner node `child[i]` when `count[i] == 0`, or a leaf of `count[i]`
+/// triangles whose packets start at `child[i]` (or, with [`ENTRY_LEAF`] set,
+/// of [`LeafPrims`] entries starting at `child[i]`).
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 pub struct WideNode {
     /// Rows 0..3: per-lane `min.x, min.y, min.z`; rows 3..6: `max.x, max.y, max.z`.
     pub b: [[f32; WIDTH]; 6],
-    /// Child node index or first primitive.
+    /// Child node index, first packet or first entry.
     pub child: [u32; WIDTH],
-    /// Primitive count of a leaf lane, 0 for inner-node and empty lanes.
+    /// Primitive count of a leaf lane (with [`ENTRY_LEAF`] for entry leaves), 0 for inner-node and empty lanes.
     pub count: [u32; WIDTH],
 }
 
@@ -102,16 +116,26 @@ impl WidePre {
     #[inline(always)]
     fn new(ray: &Ray) -> Self {
         let inv = ray.dir.recip();
-        let neg = [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0];
+        let (nx, ny, nz) = (usize::from(inv.x < 0.0), usize::from(inv.y < 0.0), usize::from(inv.z < 0.0));
         Self {
             o: ray.origin,
             inv,
             inv_far: inv * far_scale(),
-            near_row: [0, 1, 2].map(|a| a + 3 * neg[a] as usize),
-            far_row: [0, 1, 2].map(|a| a + 3 * (!neg[a]) as usize),
+            near_row: [3 * nx, 1 + 3 * ny, 2 + 3 * nz],
+            far_row: [3 - 3 * nx, 4 - 3 * ny, 5 - 3 * nz],
             t_min: ray.t_min,
         }
     }
+}
+
+/// The watertight test's shear for `dir`, made out of line at a ray's first
+/// leaf: most rays of a mesh that does not fill the view reach none, and
+/// keeping it out of the traversal's entry keeps the compiler from computing
+/// it ahead for every ray.
+#[cold]
+#[inline(never)]
+fn shear(dir: Vec3) -> WatertightRay {
+    WatertightRay::new(dir)
 }
 
 /// Scalar 8-lane box test: hit mask and entry distances (the arithmetic of
@@ -136,6 +160,39 @@ fn box8_scalar(n: &WideNode, p: &WidePre, cull: f32) -> (u32, [f32; WIDTH]) {
     (mask, near)
 }
 
+/// The per-ray registers of the AVX2 box test.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+struct Avx2Pre {
+    o: [std::arch::x86_64::__m256; 3],
+    inv: [std::arch::x86_64::__m256; 3],
+    inv_far: [std::arch::x86_64::__m256; 3],
+    t_min: std::arch::x86_64::__m256,
+    /// Byte offsets of the near and far rows of each axis in a node.
+    near: [usize; 3],
+    far: [usize; 3],
+}
+
+/// Broadcast `p` into the AVX2 box test's registers (a macro so it expands
+/// inside the AVX2 traversal functions).
+#[cfg(target_arch = "x86_64")]
+macro_rules! avx2_pre {
+    ($p:expr) => {{
+        use std::arch::x86_64::*;
+        let p: &WidePre = $p;
+        let b = |v: Vec3| [_mm256_set1_ps(v.x), _mm256_set1_ps(v.y), _mm256_set1_ps(v.z)];
+        let row = std::mem::size_of::<[f32; WIDTH]>();
+        Avx2Pre {
+            o: b(p.o),
+            inv: b(p.inv),
+            inv_far: b(p.inv_far),
+            t_min: _mm256_set1_ps(p.t_min),
+            near: p.near_row.map(|r| r * row),
+            far: p.far_row.map(|r| r * row),
+        }
+    }};
+}
+
 /// AVX2 8-lane box test, expanded inside the AVX2 traversal functions (a
 /// macro rather than a function so it is always inlined into them).
 /// `_mm256_max_ps`/`_mm256_min_ps` return their second operand when either is
@@ -144,25 +201,19 @@ fn box8_scalar(n: &WideNode, p: &WidePre, cull: f32) -> (u32, [f32; WIDTH]) {
 /// `f32::max`/`f32::min` in [`box8_scalar`].
 #[cfg(target_arch = "x86_64")]
 macro_rules! box8_avx2 {
-    ($n:expr, $p:expr, $cull:expr) => {{
+    ($n:expr, $q:expr, $cull:expr) => {{
         use std::arch::x86_64::*;
-        let (n, p): (&WideNode, &WidePre) = ($n, $p);
-        let ox = _mm256_set1_ps(p.o.x);
-        let oy = _mm256_set1_ps(p.o.y);
-        let oz = _mm256_set1_ps(p.o.z);
-        let ix = _mm256_set1_ps(p.inv.x);
-        let iy = _mm256_set1_ps(p.inv.y);
-        let iz = _mm256_set1_ps(p.inv.z);
-        let (fx, fy, fz) = (_mm256_set1_ps(p.inv_far.x), _mm256_set1_ps(p.inv_far.y), _mm256_set1_ps(p.inv_far.z));
-        // SAFETY: each row is 32 bytes inside a 64-byte aligned node, so aligned loads are valid.
-        let ld = |row: usize| unsafe { _mm256_load_ps(n.b[row].as_ptr()) };
-        let tn_x = _mm256_mul_ps(_mm256_sub_ps(ld(p.near_row[0]), ox), ix);
-        let tn_y = _mm256_mul_ps(_mm256_sub_ps(ld(p.near_row[1]), oy), iy);
-        let tn_z = _mm256_mul_ps(_mm256_sub_ps(ld(p.near_row[2]), oz), iz);
-        let tf_x = _mm256_mul_ps(_mm256_sub_ps(ld(p.far_row[0]), ox), fx);
-        let tf_y = _mm256_mul_ps(_mm256_sub_ps(ld(p.far_row[1]), oy), fy);
-        let tf_z = _mm256_mul_ps(_mm256_sub_ps(ld(p.far_row[2]), oz), fz);
-        let tn = _mm256_max_ps(tn_x, _mm256_max_ps(tn_y, _mm256_max_ps(tn_z, _mm256_set1_ps(p.t_min))));
+        let (n, q): (&WideNode, &Avx2Pre) = ($n, $q);
+        let base = n.b.as_ptr().cast::<u8>();
+        // SAFETY: every offset is a row (32 bytes) of the 64-byte aligned node, so aligned loads are valid.
+        let ld = |off: usize| unsafe { _mm256_load_ps(base.add(off).cast::<f32>()) };
+        let tn_x = _mm256_mul_ps(_mm256_sub_ps(ld(q.near[0]), q.o[0]), q.inv[0]);
+        let tn_y = _mm256_mul_ps(_mm256_sub_ps(ld(q.near[1]), q.o[1]), q.inv[1]);
+        let tn_z = _mm256_mul_ps(_mm256_sub_ps(ld(q.near[2]), q.o[2]), q.inv[2]);
+        let tf_x = _mm256_mul_ps(_mm256_sub_ps(ld(q.far[0]), q.o[0]), q.inv_far[0]);
+        let tf_y = _mm256_mul_ps(_mm256_sub_ps(ld(q.far[1]), q.o[1]), q.inv_far[1]);
+        let tf_z = _mm256_mul_ps(_mm256_sub_ps(ld(q.far[2]), q.o[2]), q.inv_far[2]);
+        let tn = _mm256_max_ps(tn_x, _mm256_max_ps(tn_y, _mm256_max_ps(tn_z, q.t_min)));
         let tf = _mm256_min_ps(tf_x, _mm256_min_ps(tf_y, _mm256_min_ps(tf_z, _mm256_set1_ps($cull))));
         let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
         let mut near = [0.0f32; WIDTH];
@@ -174,8 +225,15 @@ macro_rules! box8_avx2 {
 
 /// [`box8_scalar`] in the calling convention of the box-test macros.
 macro_rules! box8_portable {
-    ($n:expr, $p:expr, $cull:expr) => {
-        box8_scalar($n, $p, $cull)
+    ($n:expr, $q:expr, $cull:expr) => {
+        box8_scalar($n, $q, $cull)
+    };
+}
+
+/// The portable per-ray data is [`WidePre`] itself.
+macro_rules! portable_pre {
+    ($p:expr) => {
+        *$p
     };
 }
 
@@ -189,8 +247,9 @@ struct Entry {
 
 /// Nearest-first closest-hit traversal, generic over the box test.
 macro_rules! closest {
-    ($self:ident, $ray:ident, $test:ident, $box8:ident, $leaf:ident, $counts:expr, $stack:expr) => {{
+    ($self:ident, $ray:ident, $k:ty, $pre:ident, $box8:ident, $simd:expr, $counts:expr, $stack:expr) => {{
         let pre = WidePre::new($ray);
+        let q = $pre!(&pre);
         // The shear of the triangle test is made at the first leaf: most
         // camera rays of a mesh that does not fill the view reach none.
         let mut wr: Option<WatertightRay> = None;
@@ -200,11 +259,12 @@ macro_rules! closest {
         let mut stack = [MaybeUninit::<Entry>::uninit(); $stack];
         let mut sp = 0usize;
         let mut cur = Entry { t: r.t_min, child: 0, count: 0 };
+        let nodes = &$self.nodes[..];
         'outer: loop {
             if cur.count == 0 {
-                let node = &$self.nodes[cur.child as usize];
+                let node = &nodes[cur.child as usize];
                 $counts.node(cur.child);
-                let (mut mask, near) = $box8!(node, &pre, cull);
+                let (mut mask, near) = $box8!(node, &q, cull);
                 if mask != 0 {
                     $self.prefetch_children(node, mask);
                     let first = mask.trailing_zeros() as usize;
@@ -250,9 +310,14 @@ macro_rules! closest {
                     continue 'outer;
                 }
             } else if {
-                $counts.leaf(cur.child, cur.count);
-                let wr = wr.get_or_insert_with(|| WatertightRay::new($ray.dir));
-                $self.$leaf(cur.child, cur.count, &mut r, wr, $test, &mut best)
+                let n = cur.count & !ENTRY_LEAF;
+                $counts.leaf(cur.child, n);
+                let wr = wr.get_or_insert_with(|| shear($ray.dir));
+                if cur.count & ENTRY_LEAF != 0 {
+                    $self.prims.intersect_leaf::<$k>(cur.child, n, &mut r, wr, &mut best)
+                } else {
+                    $self.packets_closest::<$k>(cur.child, n, &mut r, wr, &mut best, $simd)
+                }
             } {
                 $counts.closer();
                 cull = cull_bound(r.t_max);
@@ -270,14 +335,15 @@ macro_rules! closest {
                 }
             }
         }
-        best
+        $self.prims.finish(best, $ray)
     }};
 }
 
 /// Any-hit traversal, generic over the box test (no ordering needed).
 macro_rules! any_hit {
-    ($self:ident, $ray:ident, $test:ident, $box8:ident, $leaf:ident, $counts:expr, $stack:expr) => {{
+    ($self:ident, $ray:ident, $k:ty, $pre:ident, $box8:ident, $simd:expr, $counts:expr, $stack:expr) => {{
         let pre = WidePre::new($ray);
+        let q = $pre!(&pre);
         let mut wr: Option<WatertightRay> = None;
         let cull = cull_bound($ray.t_max);
         // Only inner nodes are stacked: hit leaves are tested at once, so an
@@ -285,20 +351,28 @@ macro_rules! any_hit {
         let mut stack = [MaybeUninit::<u32>::uninit(); $stack];
         stack[0] = MaybeUninit::new(0);
         let mut sp = 1usize;
+        let nodes = &$self.nodes[..];
         while sp > 0 {
             sp -= 1;
             // SAFETY: entries below sp were written before.
             let index = unsafe { stack[sp].assume_init() };
-            let node = &$self.nodes[index as usize];
+            let node = &nodes[index as usize];
             $counts.node(index);
-            let (mut mask, _) = $box8!(node, &pre, cull);
+            let (mut mask, _) = $box8!(node, &q, cull);
             while mask != 0 {
                 let l = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
-                if node.count[l] > 0 {
-                    $counts.leaf(node.child[l], node.count[l]);
-                    let wr = wr.get_or_insert_with(|| WatertightRay::new($ray.dir));
-                    if $self.$leaf(node.child[l], node.count[l], $ray, wr, $test) {
+                let count = node.count[l];
+                if count > 0 {
+                    let n = count & !ENTRY_LEAF;
+                    $counts.leaf(node.child[l], n);
+                    let wr = wr.get_or_insert_with(|| shear($ray.dir));
+                    let hit = if count & ENTRY_LEAF != 0 {
+                        $self.prims.occluded_leaf::<$k>(node.child[l], n, $ray, wr)
+                    } else {
+                        $self.packets_any::<$k>(node.child[l], n, $ray, wr, $simd)
+                    };
+                    if hit {
                         return true;
                     }
                 } else {
@@ -311,25 +385,95 @@ macro_rules! any_hit {
     }};
 }
 
-/// Call the AVX2 traversal `$avx2` when the CPU has AVX2, else the portable
-/// `$scalar`, with the one-page stack when the tree is shallow enough and the
-/// large one otherwise (the stack size is a const generic after `$g`).
-macro_rules! dispatch {
-    ($self:ident, $avx2:ident, $scalar:ident, [$($g:ty),*], ($($arg:expr),*)) => {{
-        let shallow = $self.levels * WIDTH <= SHALLOW_STACK;
-        #[cfg(target_arch = "x86_64")]
-        if $self.use_avx2 {
-            // SAFETY: use_avx2 is only set when the CPU reports AVX2.
-            return unsafe {
-                if shallow {
-                    $self.$avx2::<$($g,)* SHALLOW_STACK>($($arg),*)
-                } else {
-                    $self.$avx2::<$($g,)* STACK>($($arg),*)
-                }
-            };
+/// A closest-hit entry point of one configuration.
+pub type ClosestFn = unsafe fn(&WideBvh, &Ray) -> Option<Hit>;
+/// An any-hit entry point of one configuration.
+pub type AnyFn = unsafe fn(&WideBvh, &Ray) -> bool;
+
+/// A closest-hit entry point for a packet of up to eight rays.
+pub type Closest8Fn = unsafe fn(&WideBvh, &[Ray], &mut [Option<Hit>]);
+/// An any-hit entry point for a packet of up to eight rays.
+pub type Any8Fn = unsafe fn(&WideBvh, &[Ray], &mut [bool]);
+
+/// The monomorphised traversal entry points of one configuration (triangle
+/// test, instruction set, stack size), chosen once by [`WideBvh::kernels`].
+#[derive(Clone, Copy)]
+pub struct Kernels {
+    closest: ClosestFn,
+    any: AnyFn,
+    closest8: Closest8Fn,
+    any8: Any8Fn,
+}
+
+impl std::fmt::Debug for Kernels {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Kernels")
+    }
+}
+
+impl Kernels {
+    /// Closest hit of `ray` in `bvh`, which must be the tree these kernels were chosen for.
+    #[inline(always)]
+    pub fn closest(&self, bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
+        // SAFETY: `WideBvh::kernels` only hands out AVX2 entry points when the CPU has AVX2.
+        unsafe { (self.closest)(bvh, ray) }
+    }
+
+    /// Whether anything is hit along `ray` in `bvh`.
+    #[inline(always)]
+    pub fn any(&self, bvh: &WideBvh, ray: &Ray) -> bool {
+        // SAFETY: as in `closest`.
+        unsafe { (self.any)(bvh, ray) }
+    }
+
+    /// Closest hits of `rays` into `out` (same length), eight rays at a time
+    /// ([`super::wide_packet`]); the same answers as [`Self::closest`], and
+    /// none for a ray that is not [`Ray::is_traceable`].
+    pub fn closest_batch(&self, bvh: &WideBvh, rays: &[Ray], out: &mut [Option<Hit>]) {
+        assert_eq!(rays.len(), out.len(), "closest_batch: one answer per ray");
+        if bvh.nodes.is_empty() {
+            out.fill(None);
+            return;
         }
-        if shallow { $self.$scalar::<$($g,)* SHALLOW_STACK>($($arg),*) } else { $self.$scalar::<$($g,)* STACK>($($arg),*) }
-    }};
+        for (r, o) in rays.chunks(super::wide_packet::PACKET).zip(out.chunks_mut(super::wide_packet::PACKET)) {
+            if r.len() < super::wide_packet::MIN_PACKET || !r.iter().all(Ray::is_traceable) {
+                for (r, o) in r.iter().zip(o) {
+                    *o = if r.is_traceable() { self.closest(bvh, r) } else { None };
+                }
+            } else {
+                // SAFETY: as in `closest`; the tree is not empty and each chunk holds 1 to 8 rays.
+                unsafe { (self.closest8)(bvh, r, o) };
+            }
+        }
+    }
+
+    /// Occlusion of `rays` into `out`, eight rays at a time; the same answers as [`Self::any`].
+    pub fn any_batch(&self, bvh: &WideBvh, rays: &[Ray], out: &mut [bool]) {
+        assert_eq!(rays.len(), out.len(), "any_batch: one answer per ray");
+        if bvh.nodes.is_empty() {
+            out.fill(false);
+            return;
+        }
+        for (r, o) in rays.chunks(super::wide_packet::PACKET).zip(out.chunks_mut(super::wide_packet::PACKET)) {
+            if r.len() < super::wide_packet::MIN_PACKET || !r.iter().all(Ray::is_traceable) {
+                for (r, o) in r.iter().zip(o) {
+                    *o = r.is_traceable() && self.any(bvh, r);
+                }
+            } else {
+                // SAFETY: as in `closest_batch`.
+                unsafe { (self.any8)(bvh, r, o) };
+            }
+        }
+    }
+}
+
+/// Which box test and leaf code a traversal runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Isa {
+    /// AVX2 boxes, SSE packets.
+    Avx2,
+    /// Portable scalar code.
+    Portable,
 }
 
 /// A wide BVH sharing the reordered primitives of the binary BVH it came from.
@@ -337,67 +481,153 @@ macro_rules! dispatch {
 pub struct WideBvh {
     /// Nodes; node 0 is the root. Empty when there are no primitives.
     pub nodes: Vec<WideNode>,
-    /// Primitives in leaf order (moved from the binary BVH).
+    /// Primitives of the [`ENTRY_LEAF`] leaves (those holding a sphere), in leaf order.
     pub prims: LeafPrims,
-    /// When every primitive is a triangle: the leaves' triangles in 4-wide
-    /// packets, and leaf lanes of [`Self::nodes`] point at packets instead of
-    /// [`Self::prims`] entries (`count` is still the number of triangles).
+    /// The triangles of every other leaf in 4-wide packets (None when there are no triangles).
     pub packets: Option<TriPackets>,
-    use_avx2: bool,
+    isa: Isa,
     /// Wide nodes on the longest root-to-leaf path (sizes the traversal stack).
     levels: usize,
 }
 
 impl WideBvh {
-    /// Collapse `bvh` into 8-wide nodes: each wide node takes a binary node's
-    /// children and repeatedly opens the inner child of largest surface area
-    /// until it has eight children or only leaves.
+    /// Collapse `bvh` into 8-wide nodes (see [`super::collapse`]).
     pub fn from_binary(bvh: BinaryBvh) -> Self {
-        let mut nodes = super::collapse::collapse(&bvh.nodes);
-        let prims = bvh.prims;
-        let packets = (prims.num_triangles as usize == prims.len())
-            .then(|| pack(&mut nodes, |k| (prims.entries[k].v, prims.entries[k].id)));
-        Self { levels: levels(&nodes), nodes, prims, packets, use_avx2: avx2_available() }
+        let nodes = super::collapse::collapse(&bvh.nodes);
+        let e = &bvh.prims.entries;
+        let num_triangles = bvh.prims.num_triangles;
+        Self::assemble(nodes, num_triangles, bvh.prims.spheres.clone(), e.len(), |k| e[k].id, |k| e[k].v)
     }
 
     /// [`Self::from_binary`] for a tree whose primitives are not gathered yet:
-    /// triangle meshes go straight from `prims` into packets (no intermediate
-    /// [`LeafPrims`]); scenes with spheres gather [`LeafPrims`] instead.
+    /// leaf triangles go straight from `prims` into packets.
     pub fn from_tree(prims: &Primitives, tree: &BuiltTree) -> Self {
-        let mut nodes = super::collapse::collapse(&tree.nodes);
-        let num_triangles = prims.triangles.len() as u32;
-        if prims.spheres.is_empty() {
-            let packets = pack(&mut nodes, |k| {
-                let id = tree.order[k];
-                (prims.triangles[id as usize].v, id)
-            });
-            let prims = LeafPrims { entries: Vec::new(), num_triangles };
-            Self { levels: levels(&nodes), nodes, prims, packets: Some(packets), use_avx2: avx2_available() }
-        } else {
-            let prims = LeafPrims::new(prims, &tree.order);
-            Self { levels: levels(&nodes), nodes, prims, packets: None, use_avx2: avx2_available() }
-        }
+        let nodes = super::collapse::collapse(&tree.nodes);
+        let nt = prims.triangles.len() as u32;
+        let vertices = |k: usize| {
+            let id = tree.order[k] as usize;
+            match prims.get(id) {
+                crate::geometry::Prim::Triangle(t) => t.v,
+                crate::geometry::Prim::Sphere(s) => [s.center, Vec3::new(s.radius, 0.0, 0.0), Vec3::ZERO],
+            }
+        };
+        Self::assemble(nodes, nt, prims.spheres.clone(), tree.order.len(), |k| tree.order[k], vertices)
     }
 
-    /// Force the portable scalar box test (for testing it on AVX2 machines).
+    /// Point every leaf lane at its packets, or at its entries when it holds a sphere.
+    /// `id(k)` and `v(k)` give leaf slot `k`'s primitive id and data (a [`crate::bvh::prims::LeafEntry`]'s `v`).
+    fn assemble(
+        mut nodes: Vec<WideNode>,
+        num_triangles: u32,
+        spheres: Vec<crate::geometry::Sphere>,
+        slots: usize,
+        id: impl Fn(usize) -> u32 + Sync,
+        v: impl Fn(usize) -> [Vec3; 3] + Sync,
+    ) -> Self {
+        let all_triangles = num_triangles as usize == slots;
+        let only_triangles =
+            |first: u32, count: u32| all_triangles || (first..first + count).all(|k| id(k as usize) < num_triangles);
+        // Exact sizes up front: no reallocation copies of a many-megabyte array.
+        let (mut npk, mut nent) = (0, 0);
+        for node in &nodes {
+            for l in 0..WIDTH {
+                let c = node.count[l];
+                if c > 0 {
+                    if only_triangles(node.child[l], c) {
+                        npk += packets_for(c);
+                    } else {
+                        nent += c as usize;
+                    }
+                }
+            }
+        }
+        let mut packets = TriPackets { packets: super::huge::vec_with_capacity(npk) };
+        let mut entries = Vec::with_capacity(nent);
+        let tri = |k: usize| (v(k), id(k));
+        if all_triangles && rayon::current_num_threads() > 1 && npk >= 1 << 14 {
+            pack_parallel(&mut nodes, &mut packets.packets, npk, &tri);
+            let prims = LeafPrims { entries, num_triangles, spheres };
+            return Self { levels: levels(&nodes), nodes, prims, packets: Some(packets), isa: detect_isa() };
+        }
+        for node in &mut nodes {
+            for l in 0..WIDTH {
+                let (first, count) = (node.child[l], node.count[l]);
+                if count == 0 {
+                    continue;
+                }
+                if only_triangles(first, count) {
+                    node.child[l] = packets.push_leaf_with(first, count, tri);
+                } else {
+                    node.child[l] = entries.len() as u32;
+                    node.count[l] = count | ENTRY_LEAF;
+                    entries.extend(
+                        (first..first + count)
+                            .map(|k| super::prims::LeafEntry { v: v(k as usize), id: id(k as usize) }),
+                    );
+                }
+            }
+        }
+        let packets = (num_triangles > 0).then_some(packets);
+        let prims = LeafPrims { entries, num_triangles, spheres };
+        Self { levels: levels(&nodes), nodes, prims, packets, isa: detect_isa() }
+    }
+
+    /// Force the portable scalar code (for testing it on AVX2 machines).
     pub fn set_scalar(&mut self) {
-        self.use_avx2 = false;
+        self.isa = Isa::Portable;
     }
 
     /// True when the AVX2 path is used.
     pub fn uses_avx2(&self) -> bool {
-        self.use_avx2
+        self.isa == Isa::Avx2
     }
 
     /// Memory held by nodes and primitives, in bytes.
     pub fn bytes(&self) -> usize {
         self.nodes.len() * std::mem::size_of::<WideNode>()
-            + self.packets.as_ref().map_or_else(|| self.prims.bytes(), TriPackets::bytes)
+            + self.prims.bytes()
+            + self.packets.as_ref().map_or(0, TriPackets::bytes)
+    }
+
+    /// The traversal entry points for triangle test `test` on this tree and
+    /// this CPU, chosen once (keep them beside the tree; they must not be
+    /// used with another tree).
+    pub fn kernels(&self, test: TriangleTest) -> Kernels {
+        crate::with_triangle_kernel!(test, K => self.kernels_for::<K>())
+    }
+
+    fn kernels_for<K: TriangleKernel>(&self) -> Kernels {
+        let shallow = self.levels * (WIDTH - 1) <= SHALLOW_STACK;
+        #[cfg(target_arch = "x86_64")]
+        if self.isa == Isa::Avx2 {
+            use super::wide_packet::{any8, closest8};
+            return if shallow {
+                Kernels {
+                    closest: closest_avx2::<K, SHALLOW_STACK>,
+                    any: any_avx2::<K, SHALLOW_STACK>,
+                    closest8: closest8::<K, SHALLOW_STACK>,
+                    any8: any8::<K, SHALLOW_STACK>,
+                }
+            } else {
+                Kernels {
+                    closest: closest_avx2::<K, STACK>,
+                    any: any_avx2::<K, STACK>,
+                    closest8: closest8::<K, STACK>,
+                    any8: any8::<K, STACK>,
+                }
+            };
+        }
+        let (closest, any): (ClosestFn, AnyFn) = if shallow {
+            (closest_portable::<K, SHALLOW_STACK>, any_portable::<K, SHALLOW_STACK>)
+        } else {
+            (closest_portable::<K, STACK>, any_portable::<K, STACK>)
+        };
+        Kernels { closest, any, closest8: one_by_one_closest::<K>, any8: one_by_one_any::<K> }
     }
 
     /// Closest hit (ties: lowest primitive id).
     pub fn intersect(&self, ray: &Ray, test: TriangleTest) -> Option<Hit> {
-        self.intersect_counting(ray, test, &mut ())
+        self.kernels(test).closest(self, ray)
     }
 
     /// [`Self::intersect`] that also counts the work it does into `counts`
@@ -409,27 +639,43 @@ impl WideBvh {
 
     /// [`Self::intersect`] reporting its work to `counts` (any [`Count`];
     /// `()` is [`Self::intersect`] itself). Does not call [`Count::ray`].
-    #[inline(always)]
     pub fn intersect_counting<C: Count>(&self, ray: &Ray, test: TriangleTest, counts: &mut C) -> Option<Hit> {
+        crate::with_triangle_kernel!(test, K => self.closest_counting::<K, C>(ray, counts))
+    }
+
+    fn closest_counting<K: TriangleKernel, C: Count>(&self, ray: &Ray, counts: &mut C) -> Option<Hit> {
         if self.nodes.is_empty() {
             return None;
         }
-        dispatch!(self, intersect_avx2, intersect_scalar, [C], (ray, test, counts))
+        #[cfg(target_arch = "x86_64")]
+        if self.isa == Isa::Avx2 {
+            // SAFETY: isa is Avx2 only when the CPU reports AVX2.
+            return unsafe { self.closest_avx2_impl::<K, C, STACK>(ray, counts) };
+        }
+        self.closest_portable_impl::<K, C, STACK>(ray, counts)
     }
 
     /// True when anything is hit within the ray's interval.
     pub fn occluded(&self, ray: &Ray, test: TriangleTest) -> bool {
-        self.occluded_counting(ray, test, &mut ())
+        self.kernels(test).any(self, ray)
     }
 
     /// [`Self::occluded`] reporting its work to `counts` (the same traversal).
     /// Does not call [`Count::ray`].
-    #[inline(always)]
     pub fn occluded_counting<C: Count>(&self, ray: &Ray, test: TriangleTest, counts: &mut C) -> bool {
+        crate::with_triangle_kernel!(test, K => self.any_counting::<K, C>(ray, counts))
+    }
+
+    fn any_counting<K: TriangleKernel, C: Count>(&self, ray: &Ray, counts: &mut C) -> bool {
         if self.nodes.is_empty() {
             return false;
         }
-        dispatch!(self, occluded_avx2, occluded_scalar, [C], (ray, test, counts))
+        #[cfg(target_arch = "x86_64")]
+        if self.isa == Isa::Avx2 {
+            // SAFETY: isa is Avx2 only when the CPU reports AVX2.
+            return unsafe { self.any_avx2_impl::<K, C, STACK>(ray, counts) };
+        }
+        self.any_portable_impl::<K, C, STACK>(ray, counts)
     }
 
     /// Ask the cache for the nodes and leaf primitives of the children in
@@ -442,26 +688,40 @@ impl WideBvh {
             use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
             let l = mask.trailing_zeros() as usize;
             mask &= mask - 1;
-            let (c, n) = (node.child[l] as usize, node.count[l] as usize);
-            let (p, bytes) = if n == 0 {
-                (self.nodes.as_ptr().wrapping_add(c).cast::<i8>(), std::mem::size_of::<WideNode>())
-            } else if let Some(pk) = &self.packets {
-                (
-                    pk.packets.as_ptr().wrapping_add(c).cast::<i8>(),
-                    super::packet::packets_for(n as u32) * std::mem::size_of::<super::packet::Tri4>(),
-                )
+            let (c, n) = (node.child[l] as usize, node.count[l]);
+            // SAFETY (all prefetches below): prefetching is a hint and never faults, whatever the address.
+            let line = |p: *const i8| unsafe { _mm_prefetch::<_MM_HINT_T0>(p) };
+            if n == 0 {
+                // A node: 256 bytes at a 64-byte boundary, exactly four lines.
+                let p = self.nodes.as_ptr().wrapping_add(c).cast::<i8>();
+                line(p);
+                line(p.wrapping_add(64));
+                line(p.wrapping_add(128));
+                line(p.wrapping_add(192));
+                continue;
+            }
+            let (p, bytes) = if n & ENTRY_LEAF == 0
+                && let Some(pk) = &self.packets
+            {
+                let p = pk.packets.as_ptr().wrapping_add(c).cast::<i8>();
+                // One packet (160 bytes at a 32-byte boundary) spans exactly three lines.
+                line(p);
+                line(p.wrapping_add(64));
+                line(p.wrapping_add(128));
+                if n as usize <= super::packet::PW {
+                    continue;
+                }
+                (p, packets_for(n) * std::mem::size_of::<super::packet::Tri4>())
             } else {
-                (
-                    self.prims.entries.as_ptr().wrapping_add(c).cast::<i8>(),
-                    n * std::mem::size_of::<super::prims::LeafEntry>(),
-                )
+                let n = (n & !ENTRY_LEAF) as usize;
+                let p = self.prims.entries.as_ptr().wrapping_add(c).cast::<i8>();
+                (p, n * std::mem::size_of::<super::prims::LeafEntry>())
             };
             // Every cache line the range touches (it need not start on a line).
             let mut off = 0;
             let end = (p as usize % 64) + bytes;
             while off < end {
-                // SAFETY: prefetching is a hint and never faults, whatever the address.
-                unsafe { _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(off)) };
+                line(p.wrapping_add(off));
                 off += 64;
             }
         }
@@ -469,80 +729,165 @@ impl WideBvh {
         let _ = (node, mask);
     }
 
-    /// Portable closest-hit leaf test (packets or entries).
+    /// Closest-hit test of the triangle leaf of `count` triangles from packet
+    /// `first`: SSE packets for the watertight test when `simd`, the
+    /// per-triangle loop otherwise (same results).
     #[inline(always)]
-    fn leaf_closest_scalar(
+    pub(super) fn packets_closest<K: TriangleKernel>(
         &self,
         first: u32,
         count: u32,
         ray: &mut Ray,
         wr: &WatertightRay,
-        test: TriangleTest,
         best: &mut Option<Hit>,
+        simd: bool,
     ) -> bool {
-        match &self.packets {
-            Some(pk) => pk.intersect_leaf_scalar(first, count, ray, wr, test, best),
-            None => self.prims.intersect_leaf(first, count, ray, wr, test, best),
+        // SAFETY of the unwrap's absence: triangle leaves exist only when packets were built.
+        let Some(pk) = &self.packets else { return false };
+        #[cfg(target_arch = "x86_64")]
+        if simd && K::WATERTIGHT {
+            return pk.intersect_leaf_simd(first, count, ray, wr, best);
         }
+        let _ = simd;
+        pk.intersect_leaf_scalar::<K>(first, count, ray, wr, best)
     }
 
-    /// Portable any-hit leaf test (packets or entries).
+    /// Any-hit test of a triangle leaf (see [`Self::packets_closest`]).
     #[inline(always)]
-    fn leaf_occluded_scalar(&self, first: u32, count: u32, ray: &Ray, wr: &WatertightRay, test: TriangleTest) -> bool {
-        match &self.packets {
-            Some(pk) => pk.occluded_leaf_scalar(first, count, ray, wr, test),
-            None => self.prims.occluded_leaf(first, count, ray, wr, test),
-        }
-    }
-
-    /// SIMD closest-hit leaf test: packets with the watertight test go four
-    /// at a time, everything else through [`Self::leaf_closest_scalar`].
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    fn leaf_closest_simd(
+    pub(super) fn packets_any<K: TriangleKernel>(
         &self,
         first: u32,
         count: u32,
-        ray: &mut Ray,
+        ray: &Ray,
         wr: &WatertightRay,
-        test: TriangleTest,
-        best: &mut Option<Hit>,
+        simd: bool,
     ) -> bool {
-        match &self.packets {
-            Some(pk) if test == TriangleTest::Watertight => pk.intersect_leaf_simd(first, count, ray, wr, best),
-            _ => self.leaf_closest_scalar(first, count, ray, wr, test, best),
+        let Some(pk) = &self.packets else { return false };
+        #[cfg(target_arch = "x86_64")]
+        if simd && K::WATERTIGHT {
+            return pk.occluded_leaf_simd(first, count, ray, wr);
         }
+        let _ = simd;
+        pk.occluded_leaf_scalar::<K>(first, count, ray, wr)
     }
 
-    /// SIMD any-hit leaf test (see [`Self::leaf_closest_simd`]).
-    #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    fn leaf_occluded_simd(&self, first: u32, count: u32, ray: &Ray, wr: &WatertightRay, test: TriangleTest) -> bool {
-        match &self.packets {
-            Some(pk) if test == TriangleTest::Watertight => pk.occluded_leaf_simd(first, count, ray, wr),
-            _ => self.leaf_occluded_scalar(first, count, ray, wr, test),
+    fn closest_portable_impl<K: TriangleKernel, C: Count, const S: usize>(
+        &self,
+        ray: &Ray,
+        counts: &mut C,
+    ) -> Option<Hit> {
+        closest!(self, ray, K, portable_pre, box8_portable, false, counts, S)
+    }
+
+    #[inline(always)]
+    fn any_portable_impl<K: TriangleKernel, C: Count, const S: usize>(&self, ray: &Ray, counts: &mut C) -> bool {
+        any_hit!(self, ray, K, portable_pre, box8_portable, false, counts, S)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn closest_avx2_impl<K: TriangleKernel, C: Count, const S: usize>(&self, ray: &Ray, counts: &mut C) -> Option<Hit> {
+        closest!(self, ray, K, avx2_pre, box8_avx2, true, counts, S)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn any_avx2_impl<K: TriangleKernel, C: Count, const S: usize>(&self, ray: &Ray, counts: &mut C) -> bool {
+        any_hit!(self, ray, K, avx2_pre, box8_avx2, true, counts, S)
+    }
+}
+
+/// The portable closest-hit entry point.
+unsafe fn closest_portable<K: TriangleKernel, const S: usize>(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
+    if bvh.nodes.is_empty() {
+        return None;
+    }
+    bvh.closest_portable_impl::<K, (), S>(ray, &mut ())
+}
+
+/// The portable any-hit entry point.
+unsafe fn any_portable<K: TriangleKernel, const S: usize>(bvh: &WideBvh, ray: &Ray) -> bool {
+    if bvh.nodes.is_empty() {
+        return false;
+    }
+    bvh.any_portable_impl::<K, (), S>(ray, &mut ())
+}
+
+/// The AVX2 closest-hit entry point (only called when the CPU has AVX2).
+#[cfg(target_arch = "x86_64")]
+unsafe fn closest_avx2<K: TriangleKernel, const S: usize>(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
+    if bvh.nodes.is_empty() {
+        return None;
+    }
+    // SAFETY: the caller guarantees AVX2 (`WideBvh::kernels`).
+    unsafe { bvh.closest_avx2_impl::<K, (), S>(ray, &mut ()) }
+}
+
+/// The AVX2 any-hit entry point (only called when the CPU has AVX2).
+#[cfg(target_arch = "x86_64")]
+unsafe fn any_avx2<K: TriangleKernel, const S: usize>(bvh: &WideBvh, ray: &Ray) -> bool {
+    if bvh.nodes.is_empty() {
+        return false;
+    }
+    // SAFETY: the caller guarantees AVX2 (`WideBvh::kernels`).
+    unsafe { bvh.any_avx2_impl::<K, (), S>(ray, &mut ()) }
+}
+
+/// The portable packet entry point: each ray through the single-ray kernel.
+unsafe fn one_by_one_closest<K: TriangleKernel>(bvh: &WideBvh, rays: &[Ray], out: &mut [Option<Hit>]) {
+    for (r, o) in rays.iter().zip(out) {
+        *o = bvh.closest_portable_impl::<K, (), STACK>(r, &mut ());
+    }
+}
+
+/// The portable any-hit packet entry point.
+unsafe fn one_by_one_any<K: TriangleKernel>(bvh: &WideBvh, rays: &[Ray], out: &mut [bool]) {
+    for (r, o) in rays.iter().zip(out) {
+        *o = bvh.any_portable_impl::<K, (), STACK>(r, &mut ());
+    }
+}
+
+/// The triangle packets of every leaf lane of `nodes`, written in parallel
+/// into `packets` (empty, with room for `npk`) in the order of the sequential
+/// pass (node by node, lane by lane), and each lane pointed at its first packet.
+fn pack_parallel(
+    nodes: &mut [WideNode],
+    packets: &mut Vec<super::packet::Tri4>,
+    npk: usize,
+    tri: &(impl Fn(usize) -> ([Vec3; 3], u32) + Sync),
+) {
+    use rayon::prelude::*;
+    assert!(packets.is_empty() && packets.capacity() >= npk);
+    // Each node's packets, consecutive and in node order.
+    let mut chunks = Vec::with_capacity(nodes.len());
+    let mut rest = &mut packets.spare_capacity_mut()[..npk];
+    let mut start = 0u32;
+    for node in nodes.iter() {
+        let k: usize = node.count.iter().map(|&c| packets_for(c)).sum();
+        let (head, tail) = rest.split_at_mut(k);
+        chunks.push((start, head));
+        start += k as u32;
+        rest = tail;
+    }
+    nodes.par_iter_mut().zip(chunks).with_min_len(256).for_each(|(node, (mut at, dst))| {
+        let mut w = 0;
+        for l in 0..WIDTH {
+            let (first, count) = (node.child[l], node.count[l]);
+            if count == 0 {
+                continue;
+            }
+            node.child[l] = at;
+            for c in 0..packets_for(count) {
+                dst[w].write(super::packet::leaf_packet(first, count, c, tri));
+                w += 1;
+            }
+            at += packets_for(count) as u32;
         }
-    }
-
-    fn intersect_scalar<C: Count, const S: usize>(&self, ray: &Ray, test: TriangleTest, counts: &mut C) -> Option<Hit> {
-        closest!(self, ray, test, box8_portable, leaf_closest_scalar, counts, S)
-    }
-
-    fn occluded_scalar<C: Count, const S: usize>(&self, ray: &Ray, test: TriangleTest, counts: &mut C) -> bool {
-        any_hit!(self, ray, test, box8_portable, leaf_occluded_scalar, counts, S)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn intersect_avx2<C: Count, const S: usize>(&self, ray: &Ray, test: TriangleTest, counts: &mut C) -> Option<Hit> {
-        closest!(self, ray, test, box8_avx2, leaf_closest_simd, counts, S)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn occluded_avx2<C: Count, const S: usize>(&self, ray: &Ray, test: TriangleTest, counts: &mut C) -> bool {
-        any_hit!(self, ray, test, box8_avx2, leaf_occluded_simd, counts, S)
-    }
+    });
+    // SAFETY: the chunks cover the first `npk` slots exactly and every one of
+    // them was written above (each node writes all the packets it counted).
+    unsafe { packets.set_len(npk) };
 }
 
 /// Wide nodes on the longest root-to-leaf path (0 for an empty tree).
@@ -564,31 +909,12 @@ fn levels(nodes: &[WideNode]) -> usize {
     deepest
 }
 
-fn avx2_available() -> bool {
+fn detect_isa() -> Isa {
     #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx2")
+    if std::arch::is_x86_feature_detected!("avx2") {
+        return Isa::Avx2;
     }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
-}
-
-/// Pack every leaf lane's triangles (`tri(k)` gives leaf slot `k`) into
-/// packets and point the lanes at their first packet.
-fn pack(nodes: &mut [WideNode], tri: impl Fn(usize) -> ([Vec3; 3], u32)) -> TriPackets {
-    // Exact size up front: no reallocation copies of a many-megabyte array.
-    let total: usize = nodes.iter().flat_map(|n| n.count.iter()).map(|&c| super::packet::packets_for(c)).sum();
-    let mut packets = TriPackets { packets: Vec::with_capacity(total) };
-    for node in nodes {
-        for l in 0..WIDTH {
-            if node.count[l] > 0 {
-                node.child[l] = packets.push_leaf_with(node.child[l], node.count[l], &tri);
-            }
-        }
-    }
-    packets
+    Isa::Portable
 }
 
 #[cfg(test)]
@@ -597,34 +923,96 @@ mod tests {
 
     use super::*;
     use crate::backends::AccelConfig;
-    use crate::geometry::Triangle;
+    use crate::geometry::{Sphere, Triangle};
     use crate::rng::Pcg32;
 
-    /// The deep-tree stack (chosen for trees of more than 36 levels) gives
-    /// the same answers as the one-page stack on the same tree and rays.
-    #[test]
-    fn deep_and_shallow_stacks_agree() {
-        let mut rng = Pcg32::new(3, 0);
+    fn soup(n: usize, seed: u64) -> Primitives {
+        let mut rng = Pcg32::new(seed, 0);
         let mut p = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
-        let triangles = (0..4000)
+        let triangles = (0..n)
             .map(|_| {
                 let c = p();
                 Triangle { v: [c, c + 0.05 * p(), c + 0.05 * p()] }
             })
             .collect();
-        let prims = Primitives { triangles, spheres: Vec::new() };
+        Primitives { triangles, spheres: Vec::new() }
+    }
+
+    /// The deep-tree stack (chosen for trees of more than 27 levels) gives
+    /// the same answers as the one-page stack on the same tree and rays.
+    #[test]
+    fn deep_and_shallow_stacks_agree() {
+        let prims = soup(4000, 3);
         let shallow = super::super::build_wide(&prims, &AccelConfig::default());
-        assert!(shallow.levels * WIDTH <= SHALLOW_STACK);
+        assert!(shallow.levels * (WIDTH - 1) <= SHALLOW_STACK);
         let mut deep = shallow.clone();
         deep.levels = SHALLOW_STACK; // forces the 1024-entry stack
+        let (ks, kd) = (shallow.kernels(TriangleTest::Watertight), deep.kernels(TriangleTest::Watertight));
         let rays = crate::rays::incoherent_rays(&prims.world_bounds(), 20_000, 7);
         let mut hits = 0;
         for r in &rays {
-            let a = shallow.intersect(r, TriangleTest::Watertight);
-            assert_eq!(a, deep.intersect(r, TriangleTest::Watertight));
-            assert_eq!(shallow.occluded(r, TriangleTest::Watertight), deep.occluded(r, TriangleTest::Watertight));
+            let a = ks.closest(&shallow, r);
+            assert_eq!(a, kd.closest(&deep, r));
+            assert_eq!(ks.any(&shallow, r), kd.any(&deep, r));
             hits += usize::from(a.is_some());
         }
         assert!(hits > 1000, "only {hits} hits: the rays do not exercise the traversal");
+    }
+
+    /// With spheres among the triangles, triangle-only leaves still use
+    /// packets and the leaves holding a sphere use entries.
+    #[test]
+    fn sphere_leaves_use_entries_and_the_rest_packets() {
+        let mut prims = soup(2000, 5);
+        prims.spheres = vec![Sphere { center: Vec3::splat(0.5), radius: 0.1 }];
+        let w = super::super::build_wide(&prims, &AccelConfig::default());
+        let lanes: Vec<u32> = w.nodes.iter().flat_map(|n| n.count).filter(|&c| c > 0).collect();
+        let entry_leaves = lanes.iter().filter(|&&c| c & ENTRY_LEAF != 0).count();
+        assert_eq!(entry_leaves, 1, "one sphere, one entry leaf");
+        let packed: u32 = lanes.iter().filter(|&&c| c & ENTRY_LEAF == 0).sum();
+        assert_eq!(packed as usize + (w.prims.len()), prims.len());
+        assert!(w.prims.entries.iter().any(|e| e.id == 2000));
+    }
+
+    /// Packets of eight rays give every ray its single-ray answer, bit for
+    /// bit: coherent camera rays, incoherent rays (mixed direction signs in
+    /// one packet), a partial last packet, spheres among the triangles, and
+    /// a ray with an empty interval.
+    #[test]
+    fn packets_give_the_single_ray_answers() {
+        let mut prims = soup(3000, 9);
+        prims.spheres = vec![Sphere { center: Vec3::splat(0.5), radius: 0.1 }];
+        let b = prims.world_bounds();
+        let mut rays = crate::rays::incoherent_rays(&b, 4001, 11);
+        let eye = Vec3::new(0.5, 0.5, -2.0);
+        for i in 0..4000 {
+            let (x, y) = ((i % 64) as f32 / 64.0, (i / 64) as f32 / 64.0);
+            rays.push(Ray::new(eye, Vec3::new(x, y, 0.5) - eye));
+        }
+        rays[5].t_min = 2.0;
+        rays[5].t_max = 1.0;
+        for &scalar in &[false, true] {
+            let mut w = super::super::build_wide(&prims, &AccelConfig::default());
+            if scalar {
+                w.set_scalar();
+            }
+            let k = w.kernels(TriangleTest::Watertight);
+            let mut closest = vec![None; rays.len()];
+            let mut any = vec![false; rays.len()];
+            k.closest_batch(&w, &rays, &mut closest);
+            k.any_batch(&w, &rays, &mut any);
+            let mut hits = 0;
+            for (i, r) in rays.iter().enumerate() {
+                let one = k.closest(&w, r);
+                assert_eq!(
+                    closest[i].map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits())),
+                    one.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits())),
+                    "ray {i}"
+                );
+                assert_eq!(any[i], one.is_some(), "ray {i}");
+                hits += usize::from(one.is_some());
+            }
+            assert!(hits > 2000, "only {hits} hits");
+        }
     }
 }

@@ -7,7 +7,8 @@ use crate::backends::{Builder, Traversal};
 use crate::error::{Error, Result};
 use crate::limits;
 use crate::perf::bench::{BenchOptions, BenchReport, LIGHT};
-use crate::perf::race::RaceReport;
+use crate::perf::race::{MeshRace, RaceOptions};
+use crate::perf::render_race::{RenderRaceOptions, SceneRace};
 
 /// Arguments of `rtdiff bench`.
 #[derive(clap::Args, Debug)]
@@ -39,11 +40,31 @@ pub struct BenchArgs {
     /// Bins per axis for the sah builder (2 to 256).
     #[arg(long, default_value_t = 16, value_parser = limits::ranged::<usize>(limits::MIN_BINS as u64, limits::MAX_BINS as u64))]
     pub bins: usize,
-    /// Instead of the tables: race sah/fast against Embree MEDIUM for this
-    /// many interleaved rounds on one thread and report the median ratios
-    /// (needs `--features embree`).
+    /// Instead of the tables: race rtdiff (`bvh-sah/fast`, through the public
+    /// `Tracer` calls, single rays and batches) against Embree robust and
+    /// default, MEDIUM and HIGH, for this many interleaved rounds on each
+    /// `--threads` count, and print every median ratio with its quartiles
+    /// (needs `--features embree`). Default meshes: suzanne, dragon_87k and
+    /// dragon_full from assets/.
     #[arg(long, value_name = "ROUNDS", value_parser = limits::ranged::<usize>(1, limits::MAX_RUNS as u64))]
     pub race: Option<usize>,
+    /// Thread counts of the race (comma-separated, 1 to 1024 each).
+    #[arg(long, value_delimiter = ',', default_value = "1,2", value_parser = limits::ranged::<usize>(1, limits::MAX_THREADS as u64))]
+    pub threads: Vec<usize>,
+    /// With `--race`: also race whole renders, `--tracer native` against
+    /// `--tracer embree`, on every scene in this folder (default scenes/),
+    /// and check that their images agree.
+    #[arg(long, value_name = "DIR", num_args = 0..=1, default_missing_value = "scenes")]
+    pub renders: Option<PathBuf>,
+    /// Width and height of the raced renders (16 to 4096).
+    #[arg(long, default_value_t = 400, value_parser = limits::ranged::<u32>(16, limits::MAX_BENCH_SIZE as u64))]
+    pub render_size: u32,
+    /// With `--race`: skip the meshes (only the renders).
+    #[arg(long)]
+    pub renders_only: bool,
+    /// Also write the race's typed report as JSON to this file.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
 }
 
 impl BenchArgs {
@@ -70,24 +91,79 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if args.race == Some(0) {
         return Err(Error::Invalid("--race needs at least one round".into()));
     }
-    let scenes = if args.scenes.is_empty() {
-        let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets");
-        let mut v = vec![d.join("dragon_87k.obj")];
-        if d.join("dragon_full.obj").exists() {
-            v.push(d.join("dragon_full.obj"));
-        }
-        v
-    } else {
-        args.scenes.clone()
-    };
+    if let Some(rounds) = args.race {
+        return race(args, rounds);
+    }
+    let scenes =
+        if args.scenes.is_empty() { default_meshes(&["dragon_87k", "dragon_full"]) } else { args.scenes.clone() };
     for s in &scenes {
         let prims = crate::rays::load_primitives(s, true)?;
         println!("\n## {} ({} primitives, {} rayon threads)", s.display(), prims.len(), rayon::current_num_threads());
-        if let Some(rounds) = args.race {
-            print_race(&crate::perf::race::race_bench_sets(&prims, opts.size, opts.incoherent, rounds)?);
+        print_bench(&crate::perf::bench::run(&s.display().to_string(), prims, &opts)?);
+    }
+    Ok(())
+}
+
+/// The meshes of `assets/` named `names` (`.obj`) that are present.
+fn default_meshes(names: &[&str]) -> Vec<PathBuf> {
+    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets");
+    let found: Vec<PathBuf> = names.iter().map(|n| d.join(format!("{n}.obj"))).filter(|p| p.exists()).collect();
+    if found.is_empty() { vec![d.join(format!("{}.obj", names[0]))] } else { found }
+}
+
+/// Everything `rtdiff bench --race` measured.
+#[derive(serde::Serialize)]
+struct RaceRun<'a> {
+    meshes: &'a [MeshRace],
+    renders: &'a [SceneRace],
+    threads: &'a [usize],
+    rounds: usize,
+}
+
+/// `rtdiff bench --race`: the meshes, then the renders, then the goals.
+fn race(args: &BenchArgs, rounds: usize) -> Result<()> {
+    let opts = args.options();
+    let mut meshes = Vec::new();
+    if !args.renders_only {
+        let files = if args.scenes.is_empty() {
+            default_meshes(&["suzanne", "dragon_87k", "dragon_full"])
         } else {
-            print_bench(&crate::perf::bench::run(&s.display().to_string(), prims, &opts)?);
+            args.scenes.clone()
+        };
+        let ropts = RaceOptions { rounds, threads: args.threads.clone(), batches: true };
+        for s in &files {
+            let prims = crate::rays::load_primitives(s, true)?;
+            eprintln!("racing {} ...", s.display());
+            let m = crate::perf::race::race_bench_sets(
+                &s.display().to_string(),
+                &prims,
+                opts.size,
+                opts.incoherent,
+                &ropts,
+            )?;
+            print_mesh_race(&m, rounds);
+            meshes.push(m);
         }
+    }
+    let mut renders = Vec::new();
+    if let Some(dir) = &args.renders {
+        let dir = if dir.is_relative() && !dir.exists() {
+            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(dir)
+        } else {
+            dir.clone()
+        };
+        let ropts = RenderRaceOptions { rounds, threads: args.threads.clone(), size: args.render_size };
+        for s in crate::perf::render_race::scenes_in(&dir)? {
+            eprintln!("racing renders of {} ...", s.display());
+            renders.push(crate::perf::render_race::race_scene(&s, &ropts)?);
+        }
+        print_render_race(&renders, rounds);
+    }
+    print_goals(&meshes, &renders);
+    if let Some(path) = &args.json {
+        let run = RaceRun { meshes: &meshes, renders: &renders, threads: &args.threads, rounds };
+        let text = serde_json::to_string_pretty(&run).map_err(|e| Error::Invalid(e.to_string()))?;
+        std::fs::write(path, text).map_err(|e| Error::file(path, format!("cannot write: {e}")))?;
     }
     Ok(())
 }
@@ -142,21 +218,20 @@ pub fn print_bench(r: &BenchReport) {
     }
 }
 
-/// Print a race report as the `rtdiff bench --race` table.
-pub fn print_race(r: &RaceReport) {
-    for (set, a, b) in &r.hit_count_differences {
-        eprintln!("note: {} hits differ on {set}: rtdiff {a}, Embree {b}", a.abs_diff(*b));
-    }
+/// Print one mesh's race: one line per thread count, workload and Embree mode.
+pub fn print_mesh_race(m: &MeshRace, rounds: usize) {
     println!(
-        "\n### rtdiff sah/fast against Embree MEDIUM (rtcIntersect1 / rtcOccluded1), 1 thread, {} interleaved rounds",
-        r.rounds
+        "\n## {} ({} primitives; rtdiff tree {:.1} bytes per primitive): rtdiff bvh-sah/fast against Embree, {rounds} interleaved rounds",
+        m.mesh, m.primitives, m.rtdiff_bytes_per_primitive
     );
-    println!("ratio = Embree time / rtdiff time in the same round (above 1: rtdiff faster); CPU time of the thread");
     println!(
-        "{:<12} {:>16} {:>16} {:>7} {:>7} {:>7} {:>7}",
-        "", "rtdiff (median)", "Embree (median)", "ratio", "q1", "q3", "wins"
+        "ratio = Embree time / rtdiff time in the same round (above 1: rtdiff faster); 1 thread: CPU time, more: wall clock"
     );
-    for c in &r.contests {
+    println!(
+        "{:>3} {:<18} {:<22} {:>16} {:>16} {:>7} {:>7} {:>7} {:>7}",
+        "thr", "workload", "opponent", "rtdiff (median)", "Embree (median)", "ratio", "q1", "q3", "wins"
+    );
+    for c in &m.contests {
         let s = c.summary();
         let (a, b) = if c.rays > 0 {
             (
@@ -167,8 +242,10 @@ pub fn print_race(r: &RaceReport) {
             (format!("{:.2} ms", s.rtdiff_s * 1e3), format!("{:.2} ms", s.embree_s * 1e3))
         };
         println!(
-            "{:<12} {:>16} {:>16} {:>7.3} {:>7.3} {:>7.3} {:>5}/{}",
+            "{:>3} {:<18} {:<22} {:>16} {:>16} {:>7.3} {:>7.3} {:>7.3} {:>4}/{}",
+            c.threads,
             c.name,
+            c.opponent,
             a,
             b,
             s.ratio,
@@ -176,6 +253,97 @@ pub fn print_race(r: &RaceReport) {
             s.q3,
             s.wins,
             c.times.len()
+        );
+    }
+    for (set, opp, a, b) in &m.hit_count_differences {
+        println!("note: {} hits differ on {set} against {opp}: rtdiff {a}, Embree {b}", a.abs_diff(*b));
+    }
+}
+
+/// Print the whole-render races.
+pub fn print_render_race(r: &[SceneRace], rounds: usize) {
+    println!(
+        "\n## Whole renders, --tracer native against --tracer embree (build + render; wall clock), {rounds} interleaved rounds"
+    );
+    println!(
+        "{:<36} {:>9} {:>3} {:>10} {:>10} {:>7} {:>7} {:>7} {:>7}  images (96x96, 1 spp)",
+        "scene", "size", "thr", "native ms", "embree ms", "ratio", "q1", "q3", "wins"
+    );
+    for s in r {
+        for c in &s.contests {
+            let m = c.summary();
+            let a = &s.agreement;
+            println!(
+                "{:<36} {:>9} {:>3} {:>10.1} {:>10.1} {:>7.3} {:>7.3} {:>7.3} {:>4}/{}  {} ({} ties, {} over, max {:.1e})",
+                c.name,
+                format!("{}x{}", s.size.0, s.size.1),
+                c.threads,
+                m.rtdiff_s * 1e3,
+                m.embree_s * 1e3,
+                m.ratio,
+                m.q1,
+                m.q3,
+                m.wins,
+                c.times.len(),
+                if a.passes() { "agree" } else { "DIFFER" },
+                a.primary_ties,
+                a.over,
+                a.max_rel
+            );
+        }
+    }
+}
+
+/// Print the goals with the worst median ratio among the contests each covers.
+pub fn print_goals(meshes: &[MeshRace], renders: &[SceneRace]) {
+    let all: Vec<&crate::perf::race::Contest> = meshes.iter().flat_map(|m| &m.contests).collect();
+    let single = ["build", "primary", "incoherent", "shadow"];
+    let worst = |f: &dyn Fn(&crate::perf::race::Contest) -> bool| {
+        all.iter()
+            .filter(|c| f(c))
+            .map(|c| (c.summary().ratio, c.name.clone(), c.opponent.clone()))
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+    };
+    println!("\n## Goals (worst median ratio among the contests each covers)");
+    let line = |goal: &str, target: f64, w: Option<(f64, String, String)>| match w {
+        Some((r, n, o)) => {
+            println!("{:<62} {:>7.3} {:<5} (worst: {n} vs {o})", goal, r, if r >= target { "met" } else { "NOT" })
+        }
+        None => println!("{goal:<62}       - (not measured)"),
+    };
+    line(
+        "1 thread >= 1.10x Embree robust MEDIUM (build, 3 ray sets)",
+        1.10,
+        worst(&|c| c.threads == 1 && c.opponent == "embree-medium" && single.contains(&c.name.as_str())),
+    );
+    line(
+        "1 thread >= 1.0x Embree default MEDIUM (build, 3 ray sets)",
+        1.0,
+        worst(&|c| c.threads == 1 && c.opponent == "embree-medium-default" && single.contains(&c.name.as_str())),
+    );
+    line(
+        "2 threads >= 1.0x Embree robust (MEDIUM and HIGH)",
+        1.0,
+        worst(&|c| c.threads == 2 && !c.opponent.ends_with("-default") && single.contains(&c.name.as_str())),
+    );
+    line(
+        "batches >= 1.0x Embree's 8-wide packets (robust and default)",
+        1.0,
+        worst(&|c| c.name.starts_with("batch") && c.opponent.contains("medium")),
+    );
+    let renders_worst = renders
+        .iter()
+        .flat_map(|s| &s.contests)
+        .map(|c| (c.summary().ratio, c.name.clone(), format!("embree, {} thread(s)", c.threads)))
+        .min_by(|a, b| a.0.total_cmp(&b.0));
+    line("whole renders: native >= 1.0x embree on every scene, 1 and 2 threads", 1.0, renders_worst);
+    if !renders.is_empty() {
+        let differ: Vec<String> =
+            renders.iter().filter(|s| !s.agreement.passes()).map(|s| s.scene.display().to_string()).collect();
+        println!(
+            "{:<62} {}",
+            "whole renders: the same images",
+            if differ.is_empty() { "met".into() } else { format!("NOT: {differ:?}") }
         );
     }
 }

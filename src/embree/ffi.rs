@@ -67,6 +67,8 @@ pub const RTC_FORMAT_FLOAT3: i32 = 0x9003;
 pub const RTC_FORMAT_FLOAT4: i32 = 0x9004;
 
 // enum RTCSceneFlags
+/// `RTC_SCENE_FLAG_NONE` of the Embree 4.4 headers (Embree's default flags).
+pub const RTC_SCENE_FLAG_NONE: i32 = 0;
 /// `RTC_SCENE_FLAG_ROBUST` of the Embree 4.4 headers.
 pub const RTC_SCENE_FLAG_ROBUST: i32 = 1 << 2;
 

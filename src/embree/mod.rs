@@ -18,7 +18,7 @@ pub mod tracer;
 
 #[cfg(feature = "embree")]
 pub use device::Device;
-pub use quality::EmbreeQuality;
+pub use quality::{EmbreeMode, EmbreeQuality, embree_label};
 #[cfg(feature = "embree")]
 pub use scene::Scene;
 #[cfg(feature = "embree")]

@@ -1,6 +1,6 @@
 //! A committed Embree scene built from rtdiff's primitives.
 
-use super::EmbreeQuality;
+use super::{EmbreeMode, EmbreeQuality};
 use crate::error::{Error, Result};
 use crate::geometry::{Aabb, Primitives};
 
@@ -12,8 +12,8 @@ pub const TRIANGLE_GEOM_ID: u32 = 0;
 /// = sphere index, so rtdiff's global id is `triangles.len() + primID`).
 pub const SPHERE_GEOM_ID: u32 = 1;
 
-/// A committed, immutable Embree scene (`RTCScene`), always built with
-/// `RTC_SCENE_FLAG_ROBUST`.
+/// A committed, immutable Embree scene (`RTCScene`), built with
+/// `RTC_SCENE_FLAG_ROBUST` unless asked for Embree's default flags.
 #[derive(Debug)]
 pub struct Scene {
     raw: ffi::RTCScene,
@@ -53,6 +53,11 @@ impl Scene {
     /// triangle, so ids and vertex order match rtdiff's exactly), spheres
     /// geometry 1.
     pub fn new(device: &Device, prims: &Primitives, quality: EmbreeQuality) -> Result<Self> {
+        Self::with_mode(device, prims, quality, EmbreeMode::Robust)
+    }
+
+    /// [`Scene::new`] with the scene flags of `mode`.
+    pub fn with_mode(device: &Device, prims: &Primitives, quality: EmbreeQuality, mode: EmbreeMode) -> Result<Self> {
         let nt = prims.triangles.len();
         let ns = prims.spheres.len();
         if nt > (u32::MAX / 3) as usize || ns >= u32::MAX as usize {
@@ -68,7 +73,11 @@ impl Scene {
         let scene = Self { raw, device: device.clone(), quality: quality_code(quality) };
         // SAFETY: `raw` is a live, uncommitted scene; flag and quality are valid enum values.
         unsafe {
-            ffi::rtcSetSceneFlags(raw, ffi::RTC_SCENE_FLAG_ROBUST);
+            let flags = match mode {
+                EmbreeMode::Robust => ffi::RTC_SCENE_FLAG_ROBUST,
+                EmbreeMode::Default => ffi::RTC_SCENE_FLAG_NONE,
+            };
+            ffi::rtcSetSceneFlags(raw, flags);
             ffi::rtcSetSceneBuildQuality(raw, quality_code(quality));
         }
         device.check("setting scene flags and build quality")?;

@@ -15,7 +15,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
-use super::EmbreeQuality;
+use super::{EmbreeMode, EmbreeQuality, embree_label};
 use crate::accel::Tracer;
 use crate::error::Result;
 use crate::geometry::{Hit, Primitives, Ray};
@@ -28,6 +28,7 @@ pub struct EmbreeTracer {
     scene: Scene,
     prims: Arc<Primitives>,
     quality: EmbreeQuality,
+    mode: EmbreeMode,
 }
 
 impl EmbreeTracer {
@@ -38,8 +39,18 @@ impl EmbreeTracer {
 
     /// Build over `prims` on `device` (e.g. one made with `"threads=1"` for timing).
     pub fn with_device(device: &Device, prims: Arc<Primitives>, quality: EmbreeQuality) -> Result<Self> {
-        let scene = Scene::new(device, &prims, quality)?;
-        Ok(Self { scene, prims, quality })
+        Self::with_mode(device, prims, quality, EmbreeMode::Robust)
+    }
+
+    /// Build over `prims` on `device` with the scene flags of `mode`.
+    pub fn with_mode(
+        device: &Device,
+        prims: Arc<Primitives>,
+        quality: EmbreeQuality,
+        mode: EmbreeMode,
+    ) -> Result<Self> {
+        let scene = Scene::with_mode(device, &prims, quality, mode)?;
+        Ok(Self { scene, prims, quality, mode })
     }
 
     /// The underlying scene.
@@ -133,7 +144,7 @@ impl EmbreeTracer {
 
 impl Tracer for EmbreeTracer {
     fn name(&self) -> String {
-        self.quality.label()
+        embree_label(self.quality, self.mode)
     }
 
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
@@ -156,6 +167,22 @@ impl Tracer for EmbreeTracer {
         unsafe { ffi::rtcIntersect1(self.scene.raw(), &mut rh, std::ptr::null_mut()) };
         let h = rh.hit;
         self.convert_hit(ray, rh.ray.tfar, h.geomID, h.primID, h.u, h.v)
+    }
+
+    /// Groups of eight rays through `rtcIntersect8` (Embree's 8-wide packets).
+    fn intersect_batch(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        assert_eq!(rays.len(), out.len(), "intersect_batch: one answer per ray");
+        for (r, o) in rays.chunks(8).zip(out.chunks_mut(8)) {
+            o.copy_from_slice(&self.intersect8(r)[..r.len()]);
+        }
+    }
+
+    /// Groups of eight rays through `rtcOccluded8`.
+    fn occluded_batch(&self, rays: &[Ray], out: &mut [bool]) {
+        assert_eq!(rays.len(), out.len(), "occluded_batch: one answer per ray");
+        for (r, o) in rays.chunks(8).zip(out.chunks_mut(8)) {
+            o.copy_from_slice(&self.occluded8(r)[..r.len()]);
+        }
     }
 
     fn occluded(&self, ray: &Ray) -> bool {

@@ -19,4 +19,4 @@ pub use normalize::{normalize_to_unit_sphere, scaled_length, unit_or_zero};
 pub use primitives::{Prim, Primitives, Triangle};
 pub use ray::Ray;
 pub use sphere::Sphere;
-pub use triangle::TriangleTest;
+pub use triangle::{TriangleKernel, TriangleTest};

@@ -120,13 +120,21 @@ impl Primitives {
         wr: &triangle::WatertightRay,
         test: TriangleTest,
     ) -> Option<(f32, f32, f32)> {
+        crate::with_triangle_kernel!(test, K => self.intersect_prim_with::<K>(i, ray, wr))
+    }
+
+    /// [`Self::intersect_prim`] with the triangle test chosen by type.
+    #[inline(always)]
+    pub fn intersect_prim_with<K: triangle::TriangleKernel>(
+        &self,
+        i: usize,
+        ray: &Ray,
+        wr: &triangle::WatertightRay,
+    ) -> Option<(f32, f32, f32)> {
         match self.get(i) {
             Prim::Triangle(t) => {
                 let [a, b, c] = t.v;
-                match test {
-                    TriangleTest::Watertight => triangle::intersect_watertight(ray, wr, a, b, c),
-                    TriangleTest::MollerTrumbore => triangle::intersect_moller_trumbore(ray, a, b, c),
-                }
+                K::intersect(ray, wr, a, b, c)
             }
             Prim::Sphere(s) => s.intersect(ray),
         }

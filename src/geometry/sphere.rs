@@ -29,6 +29,16 @@ impl Sphere {
     /// `q = b + sign(b) sqrt(disc)` so neither is a difference of near-equal terms.
     #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<(f32, f32, f32)> {
+        let t = self.intersect_t(ray)?;
+        let (u, v) = self.uv_at(ray, t);
+        Some((t, u, v))
+    }
+
+    /// The distance of [`Self::intersect`] alone: traversals offer sphere
+    /// hits by distance and compute `(u, v)` ([`Self::uv_at`]) for the one
+    /// that wins, with the same bits.
+    #[inline]
+    pub fn intersect_t(&self, ray: &Ray) -> Option<f32> {
         let d = ray.dir;
         let a = d.dot(d);
         let f = ray.origin - self.center;
@@ -52,17 +62,22 @@ impl Sphere {
         if t0 > t1 {
             std::mem::swap(&mut t0, &mut t1);
         }
-        let t = if t0 >= ray.t_min && t0 <= ray.t_max {
-            t0
+        if t0 >= ray.t_min && t0 <= ray.t_max {
+            Some(t0)
         } else if t1 >= ray.t_min && t1 <= ray.t_max {
-            t1
+            Some(t1)
         } else {
-            return None;
-        };
+            None
+        }
+    }
+
+    /// The normalised longitude and colatitude `(u, v)` of the point at `t` along `ray`.
+    #[inline]
+    pub fn uv_at(&self, ray: &Ray, t: f32) -> (f32, f32) {
         let n = (ray.at(t) - self.center) / self.radius;
         let u = (n.z.atan2(n.x) / std::f32::consts::TAU).rem_euclid(1.0);
         let v = n.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI;
-        Some((t, u, v))
+        (u, v)
     }
 }
 

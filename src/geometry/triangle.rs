@@ -47,6 +47,64 @@ impl std::str::FromStr for TriangleTest {
     }
 }
 
+/// A ray/triangle test chosen by type: the traversals and leaf loops are
+/// generic over it, so each configuration compiles to its own kernel with no
+/// runtime choice of test inside the hot loops ([`with_triangle_kernel`]
+/// turns a [`TriangleTest`] value into the type once per query or per tracer).
+pub trait TriangleKernel: Copy + Default + Send + Sync + 'static {
+    /// The test as a value (labels, reports).
+    const TEST: TriangleTest;
+    /// True for the watertight test, which the BVH's SIMD packet code implements.
+    const WATERTIGHT: bool;
+    /// `Some((t, u, v))` when `ray` meets triangle `(v0, v1, v2)` within its
+    /// interval (`wr`: the per-ray constants of the watertight test).
+    fn intersect(ray: &Ray, wr: &WatertightRay, v0: Vec3, v1: Vec3, v2: Vec3) -> Option<(f32, f32, f32)>;
+}
+
+/// [`TriangleTest::Watertight`] as a type ([`intersect_watertight`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Watertight;
+
+/// [`TriangleTest::MollerTrumbore`] as a type ([`intersect_moller_trumbore`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct MollerTrumbore;
+
+impl TriangleKernel for Watertight {
+    const TEST: TriangleTest = TriangleTest::Watertight;
+    const WATERTIGHT: bool = true;
+    #[inline(always)]
+    fn intersect(ray: &Ray, wr: &WatertightRay, v0: Vec3, v1: Vec3, v2: Vec3) -> Option<(f32, f32, f32)> {
+        intersect_watertight(ray, wr, v0, v1, v2)
+    }
+}
+
+impl TriangleKernel for MollerTrumbore {
+    const TEST: TriangleTest = TriangleTest::MollerTrumbore;
+    const WATERTIGHT: bool = false;
+    #[inline(always)]
+    fn intersect(ray: &Ray, _: &WatertightRay, v0: Vec3, v1: Vec3, v2: Vec3) -> Option<(f32, f32, f32)> {
+        intersect_moller_trumbore(ray, v0, v1, v2)
+    }
+}
+
+/// Evaluate `$body` with the type `$k` bound to the [`TriangleKernel`] of the
+/// [`TriangleTest`] value `$test`: the one place a test value becomes a type.
+#[macro_export]
+macro_rules! with_triangle_kernel {
+    ($test:expr, $k:ident => $body:expr) => {
+        match $test {
+            $crate::geometry::TriangleTest::Watertight => {
+                type $k = $crate::geometry::triangle::Watertight;
+                $body
+            }
+            $crate::geometry::TriangleTest::MollerTrumbore => {
+                type $k = $crate::geometry::triangle::MollerTrumbore;
+                $body
+            }
+        }
+    };
+}
+
 /// Per-ray constants of the watertight test: the axis permutation that makes
 /// the ray direction's largest component `z`, and the shear that maps the ray
 /// onto the `+z` axis.

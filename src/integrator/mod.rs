@@ -11,7 +11,7 @@ use glam::Vec3;
 use crate::accel::Tracer;
 pub use crate::features::IntegratorKind;
 use crate::features::Plan;
-use crate::geometry::Ray;
+use crate::geometry::{Hit, Ray};
 use crate::rng::Pcg32;
 use crate::scene::Scene;
 
@@ -23,7 +23,9 @@ pub struct Counters {
     pub primary_rays: u64,
     /// Reflection, glossy and transmission rays.
     pub secondary_rays: u64,
-    /// Shadow (visibility) rays.
+    /// Shadow (visibility) queries to the tracer: one per shadow ray, one
+    /// more when transparency is on and the ray is blocked (its closest
+    /// blocker is then traced), and one per transparent surface crossed.
     pub shadow_rays: u64,
     /// Texture lookups.
     pub texture_lookups: u64,
@@ -51,6 +53,11 @@ impl Counters {
 pub trait Integrator: Send + Sync {
     /// Colour arriving at the ray origin along `ray` (a camera ray: depth 0).
     fn radiance(&self, ray: &Ray, rng: &mut Pcg32, counters: &mut Counters) -> Vec3;
+
+    /// [`Integrator::radiance`] for a camera ray whose closest hit `hit` the
+    /// caller has already traced (the renderer traces a row's camera rays as
+    /// one batch): the same colour, random numbers and counters.
+    fn radiance_with_hit(&self, ray: &Ray, hit: Option<Hit>, rng: &mut Pcg32, counters: &mut Counters) -> Vec3;
 }
 
 /// The integrator `scene` asks for, answering rays with `tracer` and doing

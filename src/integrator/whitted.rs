@@ -116,11 +116,28 @@ impl<'a> Whitted<'a> {
     /// Fraction of light from `target` that reaches `it`: 0 or 1 for opaque
     /// blockers, attenuated by `1 - opacity` per transparent surface crossed.
     pub fn visibility<R: Recorder>(&self, it: &Interaction, target: Vec3, c: &mut Counters, rec: &mut R) -> f32 {
-        let mut ray = it.si.spawn_ray_to(self.offset, target, SHADOW_T_MAX);
+        let ray = it.si.spawn_ray_to(self.offset, target, SHADOW_T_MAX);
         c.shadow_rays += 1;
         if !self.plan.transparency && !R::ACTIVE {
             return if self.tracer.occluded(&ray) { 0.0 } else { 1.0 };
         }
+        if self.plan.transparency {
+            // Any hit first: a clear ray transmits everything (what the walk
+            // would find); only a blocked one is traced again for its
+            // closest blocker (a second query, counted).
+            if !self.tracer.occluded(&ray) {
+                rec.shadow_ray(&ray, None);
+                return 1.0;
+            }
+            c.shadow_rays += 1;
+        }
+        self.transmitted(ray, target, c, rec)
+    }
+
+    /// The transparency walk of [`Self::visibility`] along its shadow ray
+    /// `ray` (already counted): the closest blocker, then on through each
+    /// transparent one.
+    fn transmitted<R: Recorder>(&self, mut ray: Ray, target: Vec3, c: &mut Counters, rec: &mut R) -> f32 {
         let mut transmitted = 1.0;
         for _ in 0..MAX_SHADOW_CROSSINGS {
             let hit = self.tracer.intersect(&ray);
@@ -138,11 +155,42 @@ impl<'a> Whitted<'a> {
         0.0
     }
 
+    /// [`Self::visibility`] of every pending sample of `batch` from `it`,
+    /// added to `sum` in sample order as `visibility * f`: the shadow rays go
+    /// to the tracer as one batch of any-hit queries; with transparency on,
+    /// only the occluded ones walk on through transparent blockers (an
+    /// unoccluded ray transmits everything, as the walk would find).
+    fn flush_shadows(&self, it: &Interaction, batch: &mut ShadowBatch, c: &mut Counters, sum: &mut Vec3) {
+        let n = batch.len;
+        if n == 0 {
+            return;
+        }
+        for k in 0..n {
+            batch.rays[k] = it.si.spawn_ray_to(self.offset, batch.targets[k], SHADOW_T_MAX);
+        }
+        c.shadow_rays += n as u64;
+        self.tracer.occluded_batch(&batch.rays[..n], &mut batch.occluded[..n]);
+        for k in 0..n {
+            let vis = match (batch.occluded[k], self.plan.transparency) {
+                (false, _) => 1.0,
+                (true, false) => 0.0,
+                (true, true) => {
+                    // Traced again for its closest blocker, as in `visibility`.
+                    c.shadow_rays += 1;
+                    self.transmitted(batch.rays[k], batch.targets[k], c, &mut NoRecorder)
+                }
+            };
+            *sum += vis * batch.f[k];
+        }
+        batch.len = 0;
+    }
+
     /// Light reflected at `it` towards `wo` from every light, `kd` being the diffuse colour there.
     fn direct<R: Recorder>(&self, it: &Interaction, m: &Material, kd: Vec3, wo: Vec3, path: &mut Path<R>) -> Vec3 {
         let sp = SurfacePoint { p: it.si.p, n: it.ns, wo, kd, ks: m.ks, shininess: m.shininess };
         let shading = model(m.model);
         let mut sum = Vec3::ZERO;
+        let mut batch = ShadowBatch::default();
         for (li, light) in self.scene.lights.iter().enumerate() {
             let point = light.is_point();
             if !point && !self.plan.area_lights {
@@ -151,18 +199,30 @@ impl<'a> Whitted<'a> {
             let shadows = if point { self.plan.hard_shadows } else { self.plan.soft_shadows };
             let (n, sampling) = (self.scene.params.light_samples, self.scene.params.light_sampling);
             let Path { rng, c, rec } = path;
-            // Shade each sample as the light produces it (no list, no allocation).
+            // Shade each sample as the light produces it (no list, no
+            // allocation); shadow rays wait in `batch` and go to the tracer
+            // together, their contributions added in sample order.
             light.sample(n, sampling, rng, &mut |s: LightSample| {
                 c.light_samples += 1;
                 let f = shading.direct(&sp, &s);
-                if f != Vec3::ZERO {
-                    let vis = if shadows { self.visibility(it, s.position, c, *rec) } else { 1.0 };
+                if f == Vec3::ZERO {
+                    rec.light_sample(li, &s, f, 0.0);
+                } else if !shadows {
+                    sum += 1.0 * f;
+                    rec.light_sample(li, &s, f, 1.0);
+                } else if R::ACTIVE {
+                    let vis = self.visibility(it, s.position, c, *rec);
                     sum += vis * f;
                     rec.light_sample(li, &s, f, vis);
                 } else {
-                    rec.light_sample(li, &s, f, 0.0);
+                    if batch.len == SHADOW_BATCH {
+                        self.flush_shadows(it, &mut batch, c, &mut sum);
+                    }
+                    (batch.targets[batch.len], batch.f[batch.len]) = (s.position, f);
+                    batch.len += 1;
                 }
             });
+            self.flush_shadows(it, &mut batch, path.c, &mut sum);
         }
         sum
     }
@@ -218,7 +278,13 @@ impl<'a> Whitted<'a> {
     /// Radiance along `ray` (a ray of kind `kind` at recursion depth `depth`) for the sample `path`.
     fn trace_path<R: Recorder>(&self, kind: RayKind, ray: &Ray, depth: u32, path: &mut Path<R>) -> Vec3 {
         path.rec.begin(kind, ray, depth);
-        let Some(hit) = self.tracer.intersect(ray) else {
+        let hit = self.tracer.intersect(ray);
+        self.shade(ray, hit, depth, path)
+    }
+
+    /// The colour along `ray` (recursion depth `depth`) whose closest hit is `hit`.
+    fn shade<R: Recorder>(&self, ray: &Ray, hit: Option<Hit>, depth: u32, path: &mut Path<R>) -> Vec3 {
+        let Some(hit) = hit else {
             path.rec.end(None, self.scene.background);
             return self.scene.background;
         };
@@ -241,9 +307,39 @@ impl<'a> Whitted<'a> {
     }
 }
 
+/// Shadow rays a shading point sends to the tracer in one batch.
+const SHADOW_BATCH: usize = 16;
+
+/// The pending shadow rays of one shading point: targets, unshadowed
+/// contributions, and room for the rays and answers.
+struct ShadowBatch {
+    len: usize,
+    targets: [Vec3; SHADOW_BATCH],
+    f: [Vec3; SHADOW_BATCH],
+    rays: [Ray; SHADOW_BATCH],
+    occluded: [bool; SHADOW_BATCH],
+}
+
+impl Default for ShadowBatch {
+    fn default() -> Self {
+        Self {
+            len: 0,
+            targets: [Vec3::ZERO; SHADOW_BATCH],
+            f: [Vec3::ZERO; SHADOW_BATCH],
+            rays: [Ray::new(Vec3::ZERO, Vec3::Z); SHADOW_BATCH],
+            occluded: [false; SHADOW_BATCH],
+        }
+    }
+}
+
 impl Integrator for Whitted<'_> {
     fn radiance(&self, ray: &Ray, rng: &mut Pcg32, counters: &mut Counters) -> Vec3 {
         counters.primary_rays += 1;
         self.trace(ray, 0, rng, counters)
+    }
+
+    fn radiance_with_hit(&self, ray: &Ray, hit: Option<Hit>, rng: &mut Pcg32, counters: &mut Counters) -> Vec3 {
+        counters.primary_rays += 1;
+        self.shade(ray, hit, 0, &mut Path { rng, c: counters, rec: &mut NoRecorder })
     }
 }

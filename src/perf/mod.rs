@@ -1,5 +1,6 @@
 //! Measurement: clocks ([`clock`]), the builder x traversal benchmark
-//! ([`bench`]), the interleaved race against Embree ([`race`]), and the
+//! ([`bench`]), the interleaved race against Embree ([`race`]) and its
+//! whole-render counterpart ([`render_race`]), and the
 //! reports' measurements: the performance table ([`table`]), run time against
 //! error ([`convergence`]) and numerical stability ([`stability`]). Each
 //! returns a typed, serialisable report; `cli/` prints them and
@@ -13,9 +14,11 @@ pub mod mitsuba;
 pub mod mitsuba_python;
 pub mod progress;
 pub mod race;
+pub mod render_race;
 pub mod stability;
 pub mod summary;
 pub mod table;
 
 pub use bench::{BenchOptions, BenchReport};
-pub use race::RaceReport;
+pub use race::{MeshRace, RaceOptions};
+pub use render_race::{RenderRaceOptions, SceneRace};

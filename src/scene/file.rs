@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use crate::backends::{AccelConfig, Backend, Builder, EmbreeQuality, Traversal};
+use crate::backends::{AccelConfig, Backend, Builder, EmbreeMode, EmbreeQuality, Traversal};
 use crate::camera::Camera;
 use crate::features::{Features, Params};
 use crate::geometry::TriangleTest;
@@ -125,6 +125,8 @@ pub struct AccelSpec {
     pub bins: Option<usize>,
     /// Embree build quality.
     pub embree_quality: Option<EmbreeQuality>,
+    /// Embree scene flags: `robust` (the default) or `default` (Embree's own default flags).
+    pub embree_mode: Option<EmbreeMode>,
 }
 
 impl AccelSpec {
@@ -141,6 +143,7 @@ impl AccelSpec {
             leaf_size: self.leaf_size.unwrap_or(d.leaf_size).max(1),
             bins: self.bins.unwrap_or(d.bins).max(2),
             embree_quality: self.embree_quality.unwrap_or(d.embree_quality),
+            embree_mode: self.embree_mode.unwrap_or(d.embree_mode),
         }
     }
 }

@@ -1,9 +1,11 @@
 //! Image oracle: linear images read and written by [`crate::film::io`], pixel metrics
 //! ([`metrics`]), NVIDIA FLIP ([`flip`]), false-colour difference pictures
 //! ([`diff_image`]), the statistical test for noisy renders ([`stats`]) and
-//! the whole comparison of two image files ([`compare`]).
+//! the whole comparison of two image files ([`compare`]), and whether two
+//! tracers render a scene alike ([`agreement`]).
 //! Definitions and formulas: `docs/image-metrics.md`.
 
+pub mod agreement;
 pub mod compare;
 pub mod diff_image;
 pub mod flip;

@@ -1,0 +1,78 @@
+//! The public single-ray path as an outside harness calls it, for profilers:
+//! `build_tracer(.., AccelConfig { .. })` then one `Tracer::intersect` or
+//! `Tracer::occluded` call per ray through `Box<dyn Tracer>`. The rays are
+//! traced by `trace_all` (never inlined), so `valgrind --tool=callgrind
+//! --toggle-collect=call_path::trace_all` counts only the tracing.
+//!
+//! `cargo run --release [--features embree] --example call_path -- MESH SET N TRACER`
+//! with SET one of `primary`, `incoherent`, `shadow`, `batch-primary`, `batch-shadow`
+//! and TRACER one of `native`, `embree`, `embree-default` (MEDIUM quality).
+
+use std::path::Path;
+
+use rtdiff::accel::Tracer;
+use rtdiff::backends::{AccelConfig, Backend, Builder, EmbreeMode, EmbreeQuality, Traversal, build_tracer};
+use rtdiff::geometry::{Hit, Ray};
+use rtdiff::perf::bench::RaySets;
+
+#[inline(never)]
+fn trace_all(t: &dyn Tracer, rays: &[Ray], any: bool, batch: bool) -> usize {
+    if batch {
+        if any {
+            let mut out = vec![false; rays.len()];
+            t.occluded_batch(rays, &mut out);
+            out.iter().filter(|&&o| o).count()
+        } else {
+            let mut out: Vec<Option<Hit>> = vec![None; rays.len()];
+            t.intersect_batch(rays, &mut out);
+            out.iter().filter(|h| h.is_some()).count()
+        }
+    } else if any {
+        rays.iter().filter(|r| t.occluded(r)).count()
+    } else {
+        rays.iter().filter(|r| t.intersect(r).is_some()).count()
+    }
+}
+
+fn main() -> rtdiff::Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mesh = args.first().map_or("assets/suzanne.obj", String::as_str);
+    let set = args.get(1).map_or("primary", String::as_str);
+    let n: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(20_000);
+    let which = args.get(3).map_or("native", String::as_str);
+    let prims = rtdiff::rays::load_primitives(Path::new(mesh), true)?;
+    let native = AccelConfig {
+        backend: Backend::Native,
+        builder: Builder::Sah,
+        traversal: Traversal::Fast,
+        ..Default::default()
+    };
+    let cfg = match which {
+        "native" => native,
+        "embree" | "embree-default" => AccelConfig {
+            backend: Backend::Embree,
+            embree_quality: EmbreeQuality::Medium,
+            embree_mode: if which == "embree" { EmbreeMode::Robust } else { EmbreeMode::Default },
+            ..Default::default()
+        },
+        other => return Err(rtdiff::Error::Invalid(format!("unknown tracer {other}"))),
+    };
+    let reference = build_tracer(prims.clone(), &native)?;
+    let sets = RaySets::new(&prims, 512, 262_144, reference.as_ref());
+    let (base, any, batch) = match set {
+        "primary" => (&sets.primary, false, false),
+        "incoherent" => (&sets.incoherent, false, false),
+        "shadow" => (&sets.shadow, true, false),
+        "batch-primary" => (&sets.primary, false, true),
+        "batch-shadow" => (&sets.shadow, true, true),
+        other => return Err(rtdiff::Error::Invalid(format!("unknown set {other}"))),
+    };
+    // A contiguous block from the middle of the set (whole image rows for
+    // primary rays), so packets of consecutive rays stay coherent.
+    let start = (base.len().saturating_sub(n)) / 2;
+    let rays: Vec<Ray> = base[start..].iter().take(n).copied().collect();
+    let tracer = build_tracer(prims, &cfg)?;
+    let hits = trace_all(tracer.as_ref(), &rays, any, batch);
+    println!("{mesh} {set} {}: {} rays, {hits} hit", tracer.name(), rays.len());
+    Ok(())
+}

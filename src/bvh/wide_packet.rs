@@ -1,0 +1,546 @@
+//! Packets of up to eight rays through the 8-wide tree: the batch entry
+//! points ([`crate::accel::Tracer::intersect_batch`] /
+//! [`crate::accel::Tracer::occluded_batch`]) for coherent rays (a tile of
+//! camera rays, the shadow rays of one surface point).
+//!
+//! The packet walks the tree once: each node is loaded once for all its
+//! rays, and each child box is tested against the eight rays at once (AVX2,
+//! rays in the lanes). The box arithmetic is the single-ray path's, lane for
+//! lane (each ray's near and far planes picked by its own direction signs,
+//! the same subtractions, multiplications and NaN-ignoring `max`/`min` in the
+//! same order), so a ray enters exactly the boxes it would enter alone, and
+//! each stacked child keeps its rays' own entry distances, so a ray whose
+//! closest hit moved nearer drops the children beyond it. Leaves are tested
+//! ray by ray with the single-ray leaf code. Each ray's answer is therefore
+//! the single-ray answer, bit for bit (the tests check it against brute
+//! force).
+
+use std::mem::MaybeUninit;
+
+use glam::Vec3;
+
+use crate::geometry::offset::gamma;
+use crate::geometry::triangle::{SIGN_MARGIN, TriangleKernel, WatertightRay, intersect_watertight};
+use crate::geometry::{Hit, Ray};
+
+use super::slab::{cull_bound, far_scale};
+use super::wide::{ENTRY_LEAF, WIDTH, WideBvh};
+
+/// Rays per packet.
+pub const PACKET: usize = 8;
+
+/// Fewer rays than this go one by one: a packet tests all eight lanes of
+/// every node for all its rays, which costs about as much as five rays
+/// walking the tree alone.
+pub const MIN_PACKET: usize = 5;
+
+/// A stacked child: its rays' entry distances (`+inf` for rays that missed it).
+#[derive(Clone, Copy)]
+#[repr(C, align(32))]
+struct Entry {
+    near: [f32; PACKET],
+    child: u32,
+    count: u32,
+}
+
+/// Per-packet ray data in structure-of-arrays form.
+#[derive(Clone, Copy)]
+#[repr(C, align(32))]
+struct Soa {
+    o: [[f32; PACKET]; 3],
+    inv: [[f32; PACKET]; 3],
+    inv_far: [[f32; PACKET]; 3],
+    t_min: [f32; PACKET],
+    cull: [f32; PACKET],
+}
+
+impl Soa {
+    /// Rays `rays` (at most [`PACKET`]); missing lanes repeat ray 0 and are never active.
+    #[inline(always)]
+    fn new(rays: &[Ray]) -> Self {
+        let mut s = Soa {
+            o: [[0.0; PACKET]; 3],
+            inv: [[0.0; PACKET]; 3],
+            inv_far: [[0.0; PACKET]; 3],
+            t_min: [0.0; PACKET],
+            cull: [0.0; PACKET],
+        };
+        for i in 0..PACKET {
+            let r = &rays[i.min(rays.len() - 1)];
+            // The single-ray path's per-ray constants (`WidePre`), ray by ray.
+            let inv = r.dir.recip();
+            let inv_far = inv * far_scale();
+            for a in 0..3 {
+                s.o[a][i] = r.origin[a];
+                s.inv[a][i] = inv[a];
+                s.inv_far[a][i] = inv_far[a];
+            }
+            s.t_min[i] = r.t_min;
+            s.cull[i] = cull_bound(r.t_max);
+        }
+        s
+    }
+}
+
+/// The box test of one child lane against the packet: `(hit mask, near)`.
+#[cfg(target_arch = "x86_64")]
+macro_rules! lane_box {
+    ($node:expr, $l:expr, $v:expr, $cull:expr, $active:expr) => {{
+        use std::arch::x86_64::*;
+        let (node, l) = ($node, $l);
+        let b = |row: usize| _mm256_set1_ps(node.b[row][l]);
+        let (near_x, near_y, near_z, far_x, far_y, far_z) = if let Some([nx, ny, nz, fx, fy, fz]) = $v.rows {
+            // Every ray's direction has the same signs: the same planes for all.
+            (b(nx), b(ny), b(nz), b(fx), b(fy), b(fz))
+        } else {
+            // Each ray's near plane is the max plane where its direction is negative.
+            let (lo_x, lo_y, lo_z, hi_x, hi_y, hi_z) = (b(0), b(1), b(2), b(3), b(4), b(5));
+            (
+                _mm256_blendv_ps(lo_x, hi_x, $v.neg[0]),
+                _mm256_blendv_ps(lo_y, hi_y, $v.neg[1]),
+                _mm256_blendv_ps(lo_z, hi_z, $v.neg[2]),
+                _mm256_blendv_ps(hi_x, lo_x, $v.neg[0]),
+                _mm256_blendv_ps(hi_y, lo_y, $v.neg[1]),
+                _mm256_blendv_ps(hi_z, lo_z, $v.neg[2]),
+            )
+        };
+        let tn_x = _mm256_mul_ps(_mm256_sub_ps(near_x, $v.o[0]), $v.inv[0]);
+        let tn_y = _mm256_mul_ps(_mm256_sub_ps(near_y, $v.o[1]), $v.inv[1]);
+        let tn_z = _mm256_mul_ps(_mm256_sub_ps(near_z, $v.o[2]), $v.inv[2]);
+        let tf_x = _mm256_mul_ps(_mm256_sub_ps(far_x, $v.o[0]), $v.inv_far[0]);
+        let tf_y = _mm256_mul_ps(_mm256_sub_ps(far_y, $v.o[1]), $v.inv_far[1]);
+        let tf_z = _mm256_mul_ps(_mm256_sub_ps(far_z, $v.o[2]), $v.inv_far[2]);
+        // Operand order as in the single-ray test: a NaN slab is ignored.
+        let tn = _mm256_max_ps(tn_x, _mm256_max_ps(tn_y, _mm256_max_ps(tn_z, $v.t_min)));
+        let tf = _mm256_min_ps(tf_x, _mm256_min_ps(tf_y, _mm256_min_ps(tf_z, $cull)));
+        let hit = _mm256_and_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf), $active);
+        (hit, tn)
+    }};
+}
+
+/// The packet's rays in AVX2 registers.
+#[cfg(target_arch = "x86_64")]
+struct Regs {
+    o: [std::arch::x86_64::__m256; 3],
+    inv: [std::arch::x86_64::__m256; 3],
+    inv_far: [std::arch::x86_64::__m256; 3],
+    neg: [std::arch::x86_64::__m256; 3],
+    /// When every ray's direction has the same signs: the rows of the near
+    /// and far planes of each axis (as the single-ray test picks them).
+    rows: Option<[usize; 6]>,
+    t_min: std::arch::x86_64::__m256,
+}
+
+#[cfg(target_arch = "x86_64")]
+macro_rules! regs {
+    ($s:expr) => {{
+        use std::arch::x86_64::*;
+        let s: &Soa = $s;
+        // SAFETY: every row is 32 bytes at a 32-byte multiple of the aligned Soa.
+        let ld = |p: &[f32; PACKET]| unsafe { _mm256_load_ps(p.as_ptr()) };
+        let inv = [ld(&s.inv[0]), ld(&s.inv[1]), ld(&s.inv[2])];
+        let z = _mm256_setzero_ps();
+        let neg = inv.map(|i| _mm256_cmp_ps::<_CMP_LT_OQ>(i, z));
+        let signs = neg.map(|n| _mm256_movemask_ps(n));
+        let rows = signs.iter().all(|&m| m == 0 || m == 0xff).then(|| {
+            let n = signs.map(|m| usize::from(m != 0));
+            [3 * n[0], 1 + 3 * n[1], 2 + 3 * n[2], 3 - 3 * n[0], 4 - 3 * n[1], 5 - 3 * n[2]]
+        });
+        Regs {
+            o: [ld(&s.o[0]), ld(&s.o[1]), ld(&s.o[2])],
+            neg,
+            rows,
+            inv,
+            inv_far: [ld(&s.inv_far[0]), ld(&s.inv_far[1]), ld(&s.inv_far[2])],
+            t_min: ld(&s.t_min),
+        }
+    }};
+}
+
+/// Horizontal minimum of the eight lanes.
+#[cfg(target_arch = "x86_64")]
+macro_rules! hmin {
+    ($v:expr) => {{
+        use std::arch::x86_64::*;
+        let v = $v;
+        let a = _mm256_min_ps(v, _mm256_permute2f128_ps::<1>(v, v));
+        let b = _mm256_min_ps(a, _mm256_shuffle_ps::<0b01_00_11_10>(a, a));
+        let c = _mm256_min_ps(b, _mm256_shuffle_ps::<0b10_11_00_01>(b, b));
+        _mm256_cvtss_f32(c)
+    }};
+}
+
+/// The packet's rays as the watertight test sees them, when they share its
+/// axis permutation: per ray, the origin on the permuted axes and the shear.
+#[cfg(target_arch = "x86_64")]
+struct Sheared {
+    k: [usize; 3],
+    o: [std::arch::x86_64::__m256; 3],
+    s: [std::arch::x86_64::__m256; 3],
+    t_min: std::arch::x86_64::__m256,
+}
+
+/// Leaves whose triangles are tested against this many of the packet's rays
+/// or more take one triangle against all eight rays at once ([`tri_x8`]).
+const SOA_LEAF_RAYS: u32 = 6;
+
+/// The watertight test of triangle `(v0, v1, v2)` against the eight rays of
+/// `sh` (rays in the lanes, `t_max` per ray): `(hit mask, uncertain mask, t,
+/// u, v)`. Lane for lane the operations of
+/// [`crate::geometry::triangle::intersect_watertight`] in the same order (as
+/// `packet::tri4_sse` does with triangles in the lanes), so a hit lane's `t,
+/// u, v` are the scalar routine's bits; uncertain lanes (an edge sign within
+/// `SIGN_MARGIN` bounds of 0, or a distance not provably positive) must be
+/// decided by the scalar routine.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn tri_x8(
+    sh: &Sheared,
+    p: &super::packet::Tri4,
+    l: usize,
+    t_max: std::arch::x86_64::__m256,
+) -> (u32, u32, [f32; PACKET], [f32; PACKET], [f32; PACKET]) {
+    use std::arch::x86_64::*;
+    let [kx, ky, kz] = sh.k;
+    let [ox, oy, oz] = sh.o;
+    let [sx, sy, sz] = sh.s;
+    // Coordinate `a` of vertex `j` of the packet's lane `l`, in every lane.
+    let b = |j: usize, a: usize| _mm256_set1_ps(p.v[3 * j + a][l]);
+    // a = v0 - o, b = v1 - o, c = v2 - o on the permuted axes.
+    let (a_x, a_y, a_z) = (_mm256_sub_ps(b(0, kx), ox), _mm256_sub_ps(b(0, ky), oy), _mm256_sub_ps(b(0, kz), oz));
+    let (b_x, b_y, b_z) = (_mm256_sub_ps(b(1, kx), ox), _mm256_sub_ps(b(1, ky), oy), _mm256_sub_ps(b(1, kz), oz));
+    let (c_x, c_y, c_z) = (_mm256_sub_ps(b(2, kx), ox), _mm256_sub_ps(b(2, ky), oy), _mm256_sub_ps(b(2, kz), oz));
+    let ax = _mm256_sub_ps(a_x, _mm256_mul_ps(sx, a_z));
+    let ay = _mm256_sub_ps(a_y, _mm256_mul_ps(sy, a_z));
+    let bx = _mm256_sub_ps(b_x, _mm256_mul_ps(sx, b_z));
+    let by = _mm256_sub_ps(b_y, _mm256_mul_ps(sy, b_z));
+    let cx = _mm256_sub_ps(c_x, _mm256_mul_ps(sx, c_z));
+    let cy = _mm256_sub_ps(c_y, _mm256_mul_ps(sy, c_z));
+    let e0 = _mm256_sub_ps(_mm256_mul_ps(cx, by), _mm256_mul_ps(cy, bx));
+    let e1 = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));
+    let e2 = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
+    let z = _mm256_setzero_ps();
+    let az = _mm256_mul_ps(sz, a_z);
+    let bz = _mm256_mul_ps(sz, b_z);
+    let cz = _mm256_mul_ps(sz, c_z);
+    // The edge functions' error bound (`watertight_e_error`, same operation order).
+    let sign = _mm256_set1_ps(-0.0);
+    let abs = |x: __m256| _mm256_andnot_ps(sign, x);
+    let max3 = |x: __m256, y: __m256, w: __m256| _mm256_max_ps(_mm256_max_ps(abs(x), abs(y)), abs(w));
+    let (max_xt, max_yt, max_zt) = (max3(ax, bx, cx), max3(ay, by, cy), max3(az, bz, cz));
+    let (g2, g3, g5) = (_mm256_set1_ps(gamma(2)), _mm256_set1_ps(gamma(3)), _mm256_set1_ps(gamma(5)));
+    let delta_x = _mm256_mul_ps(g5, _mm256_add_ps(max_xt, max_zt));
+    let delta_y = _mm256_mul_ps(g5, _mm256_add_ps(max_yt, max_zt));
+    let delta_e = _mm256_mul_ps(
+        _mm256_set1_ps(2.0),
+        _mm256_add_ps(
+            _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(g2, max_xt), max_yt), _mm256_mul_ps(delta_y, max_xt)),
+            _mm256_mul_ps(delta_x, max_yt),
+        ),
+    );
+    let min_e = _mm256_min_ps(_mm256_min_ps(abs(e0), abs(e1)), abs(e2));
+    let uncertain = _mm256_cmp_ps::<_CMP_LE_OS>(min_e, _mm256_mul_ps(_mm256_set1_ps(SIGN_MARGIN), delta_e));
+    let neg = _mm256_or_ps(
+        _mm256_or_ps(_mm256_cmp_ps::<_CMP_LT_OS>(e0, z), _mm256_cmp_ps::<_CMP_LT_OS>(e1, z)),
+        _mm256_cmp_ps::<_CMP_LT_OS>(e2, z),
+    );
+    let pos = _mm256_or_ps(
+        _mm256_or_ps(_mm256_cmp_ps::<_CMP_GT_OS>(e0, z), _mm256_cmp_ps::<_CMP_GT_OS>(e1, z)),
+        _mm256_cmp_ps::<_CMP_GT_OS>(e2, z),
+    );
+    let det = _mm256_add_ps(_mm256_add_ps(e0, e1), e2);
+    let t_scaled = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(e0, az), _mm256_mul_ps(e1, bz)), _mm256_mul_ps(e2, cz));
+    let inv_det = _mm256_div_ps(_mm256_set1_ps(1.0), det);
+    let t = _mm256_mul_ps(t_scaled, inv_det);
+    // Ordered comparisons: a NaN t fails both, as `!(t >= t_min && t <= t_max)` rejects it.
+    let in_range = _mm256_and_ps(_mm256_cmp_ps::<_CMP_GE_OS>(t, sh.t_min), _mm256_cmp_ps::<_CMP_LE_OS>(t, t_max));
+    let reject = _mm256_or_ps(_mm256_and_ps(neg, pos), uncertain);
+    let ok = _mm256_andnot_ps(reject, in_range);
+    let zero_mask = _mm256_movemask_ps(uncertain) as u32;
+    if _mm256_movemask_ps(ok) == 0 {
+        return (0, zero_mask, [0.0; PACKET], [0.0; PACKET], [0.0; PACKET]);
+    }
+    // The provably-positive-t check of `watertight_t_error` (pbrt-v4 6.8.7), same operation order.
+    let delta_z = _mm256_mul_ps(g3, max_zt);
+    let max_e = max3(e0, e1, e2);
+    let t_err = _mm256_mul_ps(
+        _mm256_mul_ps(
+            _mm256_set1_ps(3.0),
+            _mm256_add_ps(
+                _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(g3, max_e), max_zt), _mm256_mul_ps(delta_e, max_zt)),
+                _mm256_mul_ps(delta_z, max_e),
+            ),
+        ),
+        abs(inv_det),
+    );
+    let not_positive = _mm256_and_ps(_mm256_cmp_ps::<_CMP_LE_OS>(t, t_err), ok);
+    let ok = _mm256_andnot_ps(not_positive, ok);
+    let zero_mask = zero_mask | _mm256_movemask_ps(not_positive) as u32;
+    let (mut ts, mut us, mut vs) = ([0.0f32; PACKET], [0.0f32; PACKET], [0.0f32; PACKET]);
+    // SAFETY: each array has room for 8 floats; storeu has no alignment requirement.
+    unsafe {
+        _mm256_storeu_ps(ts.as_mut_ptr(), t);
+        _mm256_storeu_ps(us.as_mut_ptr(), _mm256_mul_ps(e1, inv_det));
+        _mm256_storeu_ps(vs.as_mut_ptr(), _mm256_mul_ps(e2, inv_det));
+    }
+    (_mm256_movemask_ps(ok) as u32, zero_mask, ts, us, vs)
+}
+
+/// Closest hits of up to [`PACKET`] rays, answers into `out` (same length).
+///
+/// # Safety
+/// The CPU must have AVX2; `bvh` must be non-empty; `rays` holds 1 to 8 rays.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, rays: &[Ray], out: &mut [Option<Hit>]) {
+    use std::arch::x86_64::*;
+    let n = rays.len();
+    let mut soa = Soa::new(rays);
+    let v = regs!(&soa);
+    let mut r: [Ray; PACKET] = std::array::from_fn(|i| rays[i.min(n - 1)]);
+    let mut best: [Option<Hit>; PACKET] = [None; PACKET];
+    let mut wr: [Option<WatertightRay>; PACKET] = [None; PACKET];
+    // Made at the first leaf that enough rays reach: None when the rays do not share an axis permutation.
+    let mut sheared: Option<Option<Sheared>> = None;
+    let lanes = if n == PACKET { u32::MAX } else { (1u32 << n) - 1 };
+    // SAFETY: the Soa row is aligned.
+    let mut cull = unsafe { _mm256_load_ps(soa.cull.as_ptr()) };
+    let mut stack = [MaybeUninit::<Entry>::uninit(); S];
+    let mut sp = 0usize;
+    let mut cur = Entry { near: soa.t_min, child: 0, count: 0 };
+    let mut cur_mask = lanes & 0xff;
+    let inf = _mm256_set1_ps(f32::INFINITY);
+    'outer: loop {
+        if cur.count == 0 {
+            let node = &bvh.nodes[cur.child as usize];
+            let active = _mm256_castsi256_ps(_mm256_cmpgt_epi32(
+                _mm256_and_si256(_mm256_set1_epi32(cur_mask as i32), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
+                _mm256_setzero_si256(),
+            ));
+            // Hit children with their rays' entry distances, nearest first.
+            let mut hit: [(f32, u32); WIDTH] = [(0.0, 0); WIDTH];
+            let mut near = [[0.0f32; PACKET]; WIDTH];
+            let mut k = 0;
+            for (l, near_l) in near.iter_mut().enumerate() {
+                if node.child[l] == u32::MAX {
+                    continue;
+                }
+                let (m, tn) = lane_box!(node, l, v, cull, active);
+                if _mm256_movemask_ps(m) == 0 {
+                    continue;
+                }
+                let tn = _mm256_blendv_ps(inf, tn, m);
+                // SAFETY: near_l has room for 8 floats.
+                unsafe { _mm256_storeu_ps(near_l.as_mut_ptr(), tn) };
+                let key = hmin!(tn);
+                let mut j = k;
+                while j > 0 && hit[j - 1].0 > key {
+                    hit[j] = hit[j - 1];
+                    j -= 1;
+                }
+                hit[j] = (key, l as u32);
+                k += 1;
+            }
+            if k > 0 {
+                for &(_, l) in hit[1..k].iter().rev() {
+                    let l = l as usize;
+                    stack[sp] = MaybeUninit::new(Entry { near: near[l], child: node.child[l], count: node.count[l] });
+                    sp += 1;
+                }
+                let l = hit[0].1 as usize;
+                cur = Entry { near: near[l], child: node.child[l], count: node.count[l] };
+                // SAFETY: near[l] holds 8 floats.
+                let tn = unsafe { _mm256_loadu_ps(cur.near.as_ptr()) };
+                cur_mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, cull)) as u32;
+                continue 'outer;
+            }
+        } else if K::WATERTIGHT
+            && cur.count & ENTRY_LEAF == 0
+            && cur_mask.count_ones() >= SOA_LEAF_RAYS
+            && let Some(sh) = sheared.get_or_insert_with(|| shear8(&r, &mut wr)).as_ref()
+            && let Some(pk) = &bvh.packets
+        {
+            // One triangle against all the rays at once.
+            let c = cur.count as usize;
+            let mut changed = false;
+            let mut t_max = _mm256_setr_ps(
+                r[0].t_max, r[1].t_max, r[2].t_max, r[3].t_max, r[4].t_max, r[5].t_max, r[6].t_max, r[7].t_max,
+            );
+            for k in 0..c {
+                let p = &pk.packets[cur.child as usize + k / super::packet::PW];
+                let l = k % super::packet::PW;
+                let (ok, unc, t, u, vv) = tri_x8(sh, p, l, t_max);
+                let (mut ok, mut unc) = (ok & cur_mask, unc & cur_mask);
+                let mut closer = false;
+                while unc != 0 {
+                    let i = unc.trailing_zeros() as usize;
+                    unc &= unc - 1;
+                    let w = wr[i].as_ref().expect("made by shear8");
+                    let v = [0, 1, 2].map(|j| Vec3::new(p.v[3 * j][l], p.v[3 * j + 1][l], p.v[3 * j + 2][l]));
+                    if let Some((t, u, v2)) = intersect_watertight(&r[i], w, v[0], v[1], v[2]) {
+                        closer |= Hit::offer(&mut best[i], &mut r[i], Hit { t, prim: p.id[l], u, v: v2 });
+                    }
+                }
+                while ok != 0 {
+                    let i = ok.trailing_zeros() as usize;
+                    ok &= ok - 1;
+                    closer |= Hit::offer(&mut best[i], &mut r[i], Hit { t: t[i], prim: p.id[l], u: u[i], v: vv[i] });
+                }
+                if closer {
+                    t_max = _mm256_setr_ps(
+                        r[0].t_max, r[1].t_max, r[2].t_max, r[3].t_max, r[4].t_max, r[5].t_max, r[6].t_max, r[7].t_max,
+                    );
+                    changed = true;
+                }
+            }
+            if changed {
+                for (c, ri) in soa.cull.iter_mut().zip(&r) {
+                    *c = cull_bound(ri.t_max);
+                }
+                // SAFETY: the Soa row is aligned.
+                cull = unsafe { _mm256_load_ps(soa.cull.as_ptr()) };
+            }
+        } else {
+            let c = cur.count & !ENTRY_LEAF;
+            let mut m = cur_mask;
+            let mut changed = false;
+            while m != 0 {
+                let i = m.trailing_zeros() as usize;
+                m &= m - 1;
+                let w = wr[i].get_or_insert_with(|| WatertightRay::new(r[i].dir));
+                let closer = if cur.count & ENTRY_LEAF != 0 {
+                    bvh.prims.intersect_leaf::<K>(cur.child, c, &mut r[i], w, &mut best[i])
+                } else {
+                    bvh.packets_closest::<K>(cur.child, c, &mut r[i], w, &mut best[i], true)
+                };
+                if closer {
+                    soa.cull[i] = cull_bound(r[i].t_max);
+                    changed = true;
+                }
+            }
+            if changed {
+                // SAFETY: the Soa row is aligned.
+                cull = unsafe { _mm256_load_ps(soa.cull.as_ptr()) };
+            }
+        }
+        loop {
+            if sp == 0 {
+                break 'outer;
+            }
+            sp -= 1;
+            // SAFETY: entries below sp were written before.
+            let e = unsafe { stack[sp].assume_init() };
+            // SAFETY: e.near holds 8 floats.
+            let tn = unsafe { _mm256_loadu_ps(e.near.as_ptr()) };
+            let m = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, cull)) as u32;
+            if m != 0 {
+                cur = e;
+                cur_mask = m;
+                break;
+            }
+        }
+    }
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = bvh.prims.finish(best[i], &rays[i]);
+    }
+}
+
+/// The shear of every ray (into `wr`), and the packet as [`Sheared`] when
+/// all eight rays share the axis permutation.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn shear8(r: &[Ray; PACKET], wr: &mut [Option<WatertightRay>; PACKET]) -> Option<Sheared> {
+    use std::arch::x86_64::*;
+    let w: [WatertightRay; PACKET] =
+        std::array::from_fn(|i| *wr[i].get_or_insert_with(|| WatertightRay::new(r[i].dir)));
+    let k = w[0].k;
+    if w.iter().any(|x| x.k != k) {
+        return None;
+    }
+    let lanes = |f: &dyn Fn(usize) -> f32| _mm256_setr_ps(f(0), f(1), f(2), f(3), f(4), f(5), f(6), f(7));
+    Some(Sheared {
+        k,
+        o: [0, 1, 2].map(|a| lanes(&|i| r[i].origin[k[a]])),
+        s: [lanes(&|i| w[i].s.x), lanes(&|i| w[i].s.y), lanes(&|i| w[i].s.z)],
+        t_min: lanes(&|i| r[i].t_min),
+    })
+}
+
+/// Occlusion of up to [`PACKET`] rays, answers into `out` (same length).
+///
+/// # Safety
+/// As [`closest8`].
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+pub(super) unsafe fn any8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, rays: &[Ray], out: &mut [bool]) {
+    use std::arch::x86_64::*;
+    let n = rays.len();
+    let soa = Soa::new(rays);
+    let v = regs!(&soa);
+    // SAFETY: the Soa row is aligned.
+    let cull = unsafe { _mm256_load_ps(soa.cull.as_ptr()) };
+    let mut wr: [Option<WatertightRay>; PACKET] = [None; PACKET];
+    // Rays still looking for an occluder.
+    let mut open = if n == PACKET { 0xff } else { (1u32 << n) - 1 };
+    let all = open;
+    // Only inner nodes are stacked, with the rays that entered them.
+    let mut stack = [MaybeUninit::<(u32, u32)>::uninit(); S];
+    stack[0] = MaybeUninit::new((0, open));
+    let mut sp = 1usize;
+    let bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+    while sp > 0 {
+        sp -= 1;
+        // SAFETY: entries below sp were written before.
+        let (index, entered) = unsafe { stack[sp].assume_init() };
+        let m0 = entered & open;
+        if m0 == 0 {
+            continue;
+        }
+        let node = &bvh.nodes[index as usize];
+        let active = _mm256_castsi256_ps(_mm256_cmpgt_epi32(
+            _mm256_and_si256(_mm256_set1_epi32(m0 as i32), bits),
+            _mm256_setzero_si256(),
+        ));
+        for l in 0..WIDTH {
+            if node.child[l] == u32::MAX {
+                continue;
+            }
+            let (hm, _) = lane_box!(node, l, v, cull, active);
+            let mut m = _mm256_movemask_ps(hm) as u32 & open;
+            if m == 0 {
+                continue;
+            }
+            let count = node.count[l];
+            if count == 0 {
+                stack[sp] = MaybeUninit::new((node.child[l], m));
+                sp += 1;
+                continue;
+            }
+            let c = count & !ENTRY_LEAF;
+            while m != 0 {
+                let i = m.trailing_zeros() as usize;
+                m &= m - 1;
+                let r = &rays[i];
+                let w = wr[i].get_or_insert_with(|| WatertightRay::new(r.dir));
+                let hit = if count & ENTRY_LEAF != 0 {
+                    bvh.prims.occluded_leaf::<K>(node.child[l], c, r, w)
+                } else {
+                    bvh.packets_any::<K>(node.child[l], c, r, w, true)
+                };
+                if hit {
+                    open &= !(1 << i);
+                }
+            }
+            if open == 0 {
+                break;
+            }
+        }
+        if open == 0 {
+            break;
+        }
+    }
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = (all & !open) & (1 << i) != 0;
+    }
+}
