@@ -227,7 +227,8 @@ impl Heatmap {
     }
 
     /// Write the counts as a linear float EXR with channels `nodes`,
-    /// `triangles` and `rays` (exact: every count is far below 2^24).
+    /// `triangles` and `rays` (exact: every count is far below 2^24),
+    /// byte-deterministic like [`crate::film::io::write_exr`].
     pub fn write_exr(&self, path: &Path) -> Result<()> {
         use exr::prelude::*;
         let size = (self.width as usize, self.height as usize);
@@ -236,7 +237,10 @@ impl Heatmap {
             AnyChannel::new(m.name(), FlatSamples::F32(v))
         };
         let channels = AnyChannels::sort(Metric::ALL.iter().map(|&m| ch(m)).collect());
-        let layer = Layer::new(size, LayerAttributes::named("counts"), Encoding::FAST_LOSSLESS, channels);
+        // Chunks in increasing y: the same counts give the same bytes (FAST_LOSSLESS
+        // leaves the chunk order to the writer's threads).
+        let layer =
+            Layer::new(size, LayerAttributes::named("counts"), crate::film::io::DETERMINISTIC_EXR_ENCODING, channels);
         Image::from_layer(layer)
             .write()
             .to_file(path)
