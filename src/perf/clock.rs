@@ -19,33 +19,6 @@ fn thread_cpu_seconds() -> Option<f64> {
     None
 }
 
-/// CPU time consumed by every thread of the process, in seconds.
-#[cfg(unix)]
-fn process_cpu_now() -> Option<f64> {
-    let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
-    // SAFETY: ts is a valid, writable timespec.
-    let rc = unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts) };
-    (rc == 0).then_some(ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9)
-}
-
-#[cfg(not(unix))]
-fn process_cpu_now() -> Option<f64> {
-    None
-}
-
-/// CPU seconds of the whole process during one call of `f` (the wall clock
-/// where the platform has no process clock): for work that one worker
-/// thread does while the caller waits, this is that work's CPU time, which
-/// other processes competing for the cores do not inflate.
-pub fn process_cpu_seconds<T>(f: impl FnOnce() -> T) -> (f64, T) {
-    let (w, c) = (Instant::now(), process_cpu_now());
-    let r = f();
-    match (c, process_cpu_now()) {
-        (Some(a), Some(b)) => (b - a, r),
-        _ => (w.elapsed().as_secs_f64(), r),
-    }
-}
-
 /// A stopwatch: the thread's CPU time for single-threaded work (when the
 /// platform has it), wall-clock time otherwise.
 #[derive(Clone, Copy, Debug)]
