@@ -211,15 +211,7 @@ fn area_light_converges_on_the_mitsuba_reference() {
     let r = rtdiff::perf::convergence::run(&opts).unwrap();
     let c = &r.curves[0];
     assert_eq!(c.reference.source, ReferenceSource::Mitsuba, "{:?}", c.reference);
-    let manifest: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(root.join("reference/manifest.json")).unwrap()).unwrap();
-    let seeds = manifest["references"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|e| e["name"] == "cornell_box_parallelogram_light")
-        .map(|e| e["seeds"].as_array().unwrap().len())
-        .unwrap();
+    let seeds = common::references::reference("cornell_box_parallelogram_light.phong").seeds;
     let d = &c.reference.description;
     assert!(d.contains("Mitsuba") && d.contains(&format!("mean of {seeds} seeds")), "{d}");
     assert!(matches!(c.mitsuba, MitsubaCurve::Missing { .. }));
