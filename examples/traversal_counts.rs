@@ -1,15 +1,14 @@
 //! Deterministic traversal work of the `fast` path: wide-node visits, leaf
-//! visits and packet tests per ray, on the `rtdiff bench` primary and
-//! incoherent rays. Unlike timings, these counts do not depend on the
+//! visits and packet tests per ray, on the `rtdiff bench` primary, incoherent
+//! and shadow rays (closest hit for the first two, any hit for shadow rays). Unlike timings, these counts do not depend on the
 //! machine's load, so they compare tree layouts and build parameters exactly.
 //!
 //! `cargo run --release --example traversal_counts -- [mesh.obj] [bins]`
 
-use rtdiff::backends::{AccelConfig, Builder};
+use rtdiff::backends::{AccelConfig, Builder, build_tracer};
 use rtdiff::bvh::wide::TraversalCounts;
-use rtdiff::camera::Camera;
 use rtdiff::geometry::TriangleTest;
-use rtdiff::rays::incoherent_rays;
+use rtdiff::perf::bench::RaySets;
 
 fn main() -> rtdiff::Result<()> {
     let mut args = std::env::args().skip(1);
@@ -20,14 +19,16 @@ fn main() -> rtdiff::Result<()> {
     let bvh = rtdiff::bvh::build_wide(&prims, &cfg);
     println!("{path}: {} primitives, {} wide nodes", prims.len(), bvh.nodes.len());
     println!("{:<12} {:>10} {:>10} {:>12} {:>14}", "rays", "nodes/ray", "leaves/ray", "packets/ray", "packets/leaf");
-    let sets = [
-        ("primary", Camera::default_view(512, 512).pixel_centre_rays()),
-        ("incoherent", incoherent_rays(&prims.world_bounds(), 262_144, 2024)),
-    ];
-    for (name, rays) in sets {
+    let reference = build_tracer(prims.clone(), &cfg)?;
+    let sets = RaySets::new(&prims, 512, 262_144, reference.as_ref());
+    for (name, rays, any) in sets.list() {
         let mut c = TraversalCounts::default();
-        for r in &rays {
-            bvh.intersect_counted(r, TriangleTest::Watertight, &mut c);
+        for r in rays {
+            if any {
+                bvh.occluded_counted(r, TriangleTest::Watertight, &mut c);
+            } else {
+                bvh.intersect_counted(r, TriangleTest::Watertight, &mut c);
+            }
         }
         let per = |x: u64| x as f64 / c.rays as f64;
         let ppl = c.packets as f64 / c.leaves.max(1) as f64;

@@ -660,6 +660,12 @@ impl WideBvh {
         self.kernels(test).any(self, ray)
     }
 
+    /// [`Self::occluded`] that also counts the work it does into `counts`.
+    pub fn occluded_counted(&self, ray: &Ray, test: TriangleTest, counts: &mut TraversalCounts) -> bool {
+        counts.ray();
+        self.occluded_counting(ray, test, counts)
+    }
+
     /// [`Self::occluded`] reporting its work to `counts` (the same traversal).
     /// Does not call [`Count::ray`].
     pub fn occluded_counting<C: Count>(&self, ray: &Ray, test: TriangleTest, counts: &mut C) -> bool {
