@@ -6,7 +6,7 @@
 //!
 //! `cargo run --release [--features embree] --example call_path -- MESH SET N TRACER`
 //! with SET one of `primary`, `incoherent`, `shadow`, `batch-primary`, `batch-shadow`
-//! and TRACER one of `native`, `embree`, `embree-default` (MEDIUM quality).
+//! (N rays), or `build` (N builds, counted by `--toggle-collect=call_path::build_all`), and TRACER one of `native`, `embree`, `embree-default` (MEDIUM quality).
 
 use std::path::Path;
 
@@ -14,6 +14,21 @@ use rtdiff::accel::Tracer;
 use rtdiff::backends::{AccelConfig, Backend, Builder, EmbreeMode, EmbreeQuality, Traversal, build_tracer};
 use rtdiff::geometry::{Hit, Ray};
 use rtdiff::perf::bench::RaySets;
+
+/// `n` builds of `prims` through `build_tracer` (profile with
+/// `--toggle-collect=call_path::build_all`); returns the last tracer's name length.
+#[inline(never)]
+fn build_all(
+    prims: &std::sync::Arc<rtdiff::geometry::Primitives>,
+    cfg: &AccelConfig,
+    n: usize,
+) -> rtdiff::Result<usize> {
+    let mut len = 0;
+    for _ in 0..n {
+        len = build_tracer(prims.clone(), cfg)?.name().len();
+    }
+    Ok(len)
+}
 
 #[inline(never)]
 fn trace_all(t: &dyn Tracer, rays: &[Ray], any: bool, batch: bool) -> usize {
@@ -57,6 +72,11 @@ fn main() -> rtdiff::Result<()> {
         },
         other => return Err(rtdiff::Error::Invalid(format!("unknown tracer {other}"))),
     };
+    if set == "build" {
+        let name = build_all(&prims, &cfg, n)?;
+        println!("{mesh} build: {n} builds ({name} bytes of name)");
+        return Ok(());
+    }
     let reference = build_tracer(prims.clone(), &native)?;
     let sets = RaySets::new(&prims, 512, 262_144, reference.as_ref());
     let (base, any, batch) = match set {

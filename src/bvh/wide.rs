@@ -90,6 +90,17 @@ impl WideNode {
         self.count[lane] = count;
     }
 
+    /// Lanes with a zero count, as a bit mask (bit `i` for lane `i`): the
+    /// inner nodes and the empty lanes (which no ray enters).
+    #[inline(always)]
+    pub fn inner_lanes(&self) -> u32 {
+        let mut m = 0;
+        for (i, &n) in self.count.iter().enumerate() {
+            m |= u32::from(n == 0) << i;
+        }
+        m
+    }
+
     /// Number of used lanes.
     pub fn used(&self) -> usize {
         self.child.iter().filter(|&&c| c != u32::MAX).count()
@@ -245,9 +256,11 @@ struct Entry {
     count: u32,
 }
 
-/// Nearest-first closest-hit traversal, generic over the box test.
+/// Nearest-first closest-hit traversal of the subtree under node `$start`,
+/// generic over the box test; the closest hit before
+/// [`LeafPrims::finish`] (a sphere's `(u, v)` not yet made).
 macro_rules! closest {
-    ($self:ident, $ray:ident, $k:ty, $pre:ident, $box8:ident, $simd:expr, $counts:expr, $stack:expr) => {{
+    ($self:ident, $ray:ident, $start:expr, $k:ty, $pre:ident, $box8:ident, $simd:expr, $counts:expr, $stack:expr) => {{
         let pre = WidePre::new($ray);
         let q = $pre!(&pre);
         // The shear of the triangle test is made at the first leaf: most
@@ -258,7 +271,7 @@ macro_rules! closest {
         let mut cull = cull_bound(r.t_max);
         let mut stack = [MaybeUninit::<Entry>::uninit(); $stack];
         let mut sp = 0usize;
-        let mut cur = Entry { t: r.t_min, child: 0, count: 0 };
+        let mut cur = Entry { t: r.t_min, child: $start, count: 0 };
         let nodes = &$self.nodes[..];
         'outer: loop {
             if cur.count == 0 {
@@ -335,13 +348,13 @@ macro_rules! closest {
                 }
             }
         }
-        $self.prims.finish(best, $ray)
+        best
     }};
 }
 
-/// Any-hit traversal, generic over the box test (no ordering needed).
+/// Any-hit traversal, generic over the box test (any order gives the same answer).
 macro_rules! any_hit {
-    ($self:ident, $ray:ident, $k:ty, $pre:ident, $box8:ident, $simd:expr, $counts:expr, $stack:expr) => {{
+    ($self:ident, $ray:ident, $start:expr, $k:ty, $pre:ident, $box8:ident, $simd:expr, $counts:expr, $stack:expr) => {{
         let pre = WidePre::new($ray);
         let q = $pre!(&pre);
         let mut wr: Option<WatertightRay> = None;
@@ -349,7 +362,7 @@ macro_rules! any_hit {
         // Only inner nodes are stacked: hit leaves are tested at once, so an
         // occluder is found before descending further.
         let mut stack = [MaybeUninit::<u32>::uninit(); $stack];
-        stack[0] = MaybeUninit::new(0);
+        stack[0] = MaybeUninit::new($start);
         let mut sp = 1usize;
         let nodes = &$self.nodes[..];
         while sp > 0 {
@@ -358,7 +371,27 @@ macro_rules! any_hit {
             let index = unsafe { stack[sp].assume_init() };
             let node = &nodes[index as usize];
             $counts.node(index);
-            let (mut mask, _) = $box8!(node, &q, cull);
+            let (mut mask, near) = $box8!(node, &q, cull);
+            // The nearest of the entered inner nodes is stacked first, so it
+            // is searched last: a shadow ray leaves a surface, whose own
+            // subtree is the nearest and cannot occlude it. (Same answers in
+            // any order; fewer nodes and leaves per shadow ray for lights on
+            // every side, `examples/traversal_counts.rs`.)
+            let mut inner = mask & node.inner_lanes();
+            if inner & inner.wrapping_sub(1) != 0 {
+                let mut first = inner.trailing_zeros() as usize;
+                inner &= inner - 1;
+                while inner != 0 {
+                    let l = inner.trailing_zeros() as usize;
+                    inner &= inner - 1;
+                    if near[l] < near[first] {
+                        first = l;
+                    }
+                }
+                stack[sp] = MaybeUninit::new(node.child[first]);
+                sp += 1;
+                mask &= !(1 << first);
+            }
             while mask != 0 {
                 let l = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
@@ -783,24 +816,41 @@ impl WideBvh {
         ray: &Ray,
         counts: &mut C,
     ) -> Option<Hit> {
-        closest!(self, ray, K, portable_pre, box8_portable, false, counts, S)
+        self.prims.finish(closest!(self, ray, 0, K, portable_pre, box8_portable, false, counts, S), ray)
     }
 
     #[inline(always)]
     fn any_portable_impl<K: TriangleKernel, C: Count, const S: usize>(&self, ray: &Ray, counts: &mut C) -> bool {
-        any_hit!(self, ray, K, portable_pre, box8_portable, false, counts, S)
+        any_hit!(self, ray, 0, K, portable_pre, box8_portable, false, counts, S)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     fn closest_avx2_impl<K: TriangleKernel, C: Count, const S: usize>(&self, ray: &Ray, counts: &mut C) -> Option<Hit> {
-        closest!(self, ray, K, avx2_pre, box8_avx2, true, counts, S)
+        self.prims.finish(closest!(self, ray, 0, K, avx2_pre, box8_avx2, true, counts, S), ray)
+    }
+
+    /// The AVX2 closest-hit walk of the subtree under node `start` alone,
+    /// before [`LeafPrims::finish`] (the packet walk's switch to single rays
+    /// when few of its rays are left).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    pub(super) fn closest_avx2_from<K: TriangleKernel, const S: usize>(&self, ray: &Ray, start: u32) -> Option<Hit> {
+        closest!(self, ray, start, K, avx2_pre, box8_avx2, true, &mut (), S)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     fn any_avx2_impl<K: TriangleKernel, C: Count, const S: usize>(&self, ray: &Ray, counts: &mut C) -> bool {
-        any_hit!(self, ray, K, avx2_pre, box8_avx2, true, counts, S)
+        any_hit!(self, ray, 0, K, avx2_pre, box8_avx2, true, counts, S)
+    }
+
+    /// The AVX2 any-hit walk of the subtree under node `start` alone (the
+    /// packet walk's switch to single rays when few of its rays are left).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    pub(super) fn any_avx2_from<K: TriangleKernel, const S: usize>(&self, ray: &Ray, start: u32) -> bool {
+        any_hit!(self, ray, start, K, avx2_pre, box8_avx2, true, &mut (), S)
     }
 }
 

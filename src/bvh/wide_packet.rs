@@ -312,7 +312,28 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, 
     let mut cur_mask = lanes & 0xff;
     let inf = _mm256_set1_ps(f32::INFINITY);
     'outer: loop {
-        if cur.count == 0 {
+        if cur.count == 0 && cur_mask.count_ones() <= SINGLE_RAYS {
+            // Too few rays left for eight-lane box tests to pay: each walks
+            // this subtree alone (the same box and triangle tests), bounded
+            // by its closest hit so far, and offers what it finds under the
+            // same tie rule.
+            let mut m = cur_mask;
+            let mut changed = false;
+            while m != 0 {
+                let i = m.trailing_zeros() as usize;
+                m &= m - 1;
+                if let Some(h) = bvh.closest_avx2_from::<K, S>(&r[i], cur.child)
+                    && Hit::offer(&mut best[i], &mut r[i], h)
+                {
+                    soa.cull[i] = cull_bound(r[i].t_max);
+                    changed = true;
+                }
+            }
+            if changed {
+                // SAFETY: the Soa row is aligned.
+                cull = unsafe { _mm256_load_ps(soa.cull.as_ptr()) };
+            }
+        } else if cur.count == 0 {
             let node = &bvh.nodes[cur.child as usize];
             let active = _mm256_castsi256_ps(_mm256_cmpgt_epi32(
                 _mm256_and_si256(_mm256_set1_epi32(cur_mask as i32), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
@@ -467,6 +488,10 @@ fn shear8(r: &[Ray; PACKET], wr: &mut [Option<WatertightRay>; PACKET]) -> Option
     })
 }
 
+/// A packet entry (an inner node) with at most this many of its rays still
+/// in it continues ray by ray.
+const SINGLE_RAYS: u32 = 2;
+
 /// Occlusion of up to [`PACKET`] rays, answers into `out` (same length).
 ///
 /// # Safety
@@ -489,6 +514,7 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, rays
     stack[0] = MaybeUninit::new((0, open));
     let mut sp = 1usize;
     let bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+    let inf = _mm256_set1_ps(f32::INFINITY);
     while sp > 0 {
         sp -= 1;
         // SAFETY: entries below sp were written before.
@@ -497,24 +523,49 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, rays
         if m0 == 0 {
             continue;
         }
+        if m0.count_ones() <= SINGLE_RAYS {
+            // Too few rays left for eight-lane box tests to pay: each walks
+            // this subtree alone (the same box tests, lane for lane).
+            let mut m = m0;
+            while m != 0 {
+                let i = m.trailing_zeros() as usize;
+                m &= m - 1;
+                if bvh.any_avx2_from::<K, S>(&rays[i], index) {
+                    open &= !(1 << i);
+                }
+            }
+            if open == 0 {
+                break;
+            }
+            continue;
+        }
         let node = &bvh.nodes[index as usize];
         let active = _mm256_castsi256_ps(_mm256_cmpgt_epi32(
             _mm256_and_si256(_mm256_set1_epi32(m0 as i32), bits),
             _mm256_setzero_si256(),
         ));
+        // Entered inner nodes, stacked after the node's leaves are tested,
+        // the nearest first so that it is searched last (as in the
+        // single-ray any-hit walk: a shadow ray's own surface is nearest).
+        let mut inner = [(0u32, 0u32, 0.0f32); WIDTH];
+        let (mut ni, mut nearest) = (0usize, 0usize);
         for l in 0..WIDTH {
             if node.child[l] == u32::MAX {
                 continue;
             }
-            let (hm, _) = lane_box!(node, l, v, cull, active);
+            let (hm, tn) = lane_box!(node, l, v, cull, active);
             let mut m = _mm256_movemask_ps(hm) as u32 & open;
             if m == 0 {
                 continue;
             }
             let count = node.count[l];
             if count == 0 {
-                stack[sp] = MaybeUninit::new((node.child[l], m));
-                sp += 1;
+                let t = hmin!(_mm256_blendv_ps(inf, tn, hm));
+                if ni > 0 && t < inner[nearest].2 {
+                    nearest = ni;
+                }
+                inner[ni] = (node.child[l], m, t);
+                ni += 1;
                 continue;
             }
             let c = count & !ENTRY_LEAF;
@@ -538,6 +589,17 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, rays
         }
         if open == 0 {
             break;
+        }
+        if ni > 0 {
+            let (c, m, _) = inner[nearest];
+            stack[sp] = MaybeUninit::new((c, m));
+            sp += 1;
+            for (j, &(c, m, _)) in inner[..ni].iter().enumerate() {
+                if j != nearest {
+                    stack[sp] = MaybeUninit::new((c, m));
+                    sp += 1;
+                }
+            }
         }
     }
     for (i, o) in out.iter_mut().enumerate() {
