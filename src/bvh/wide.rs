@@ -94,11 +94,27 @@ impl WideNode {
     /// inner nodes and the empty lanes (which no ray enters).
     #[inline(always)]
     pub fn inner_lanes(&self) -> u32 {
-        let mut m = 0;
-        for (i, &n) in self.count.iter().enumerate() {
-            m |= u32::from(n == 0) << i;
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::x86_64::*;
+            // SAFETY: SSE2 is part of the x86_64 baseline; `count` is 32 bytes,
+            // read as two unaligned 16-byte halves.
+            unsafe {
+                let p = self.count.as_ptr().cast::<__m128i>();
+                let z = _mm_setzero_si128();
+                let lo = _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_loadu_si128(p), z));
+                let hi = _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_loadu_si128(p.add(1)), z));
+                (_mm_movemask_ps(lo) | (_mm_movemask_ps(hi) << 4)) as u32
+            }
         }
-        m
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let mut m = 0;
+            for (i, &n) in self.count.iter().enumerate() {
+                m |= u32::from(n == 0) << i;
+            }
+            m
+        }
     }
 
     /// Number of used lanes.
