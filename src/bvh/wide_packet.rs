@@ -11,9 +11,12 @@
 //! same order), so a ray enters exactly the boxes it would enter alone, and
 //! each stacked child keeps its rays' own entry distances, so a ray whose
 //! closest hit moved nearer drops the children beyond it. Leaves are tested
-//! ray by ray with the single-ray leaf code. Each ray's answer is therefore
-//! the single-ray answer, bit for bit (the tests check it against brute
-//! force).
+//! ray by ray with the single-ray leaf code (or, for closest hits, one
+//! triangle against the rays at once with the same arithmetic), and an inner
+//! node that at most [`SINGLE_RAYS`] of the packet's rays reach is walked by
+//! each of them alone with the single-ray traversal. Each ray's answer is
+//! therefore the single-ray answer, bit for bit (the tests check it against
+//! brute force).
 
 use std::mem::MaybeUninit;
 
