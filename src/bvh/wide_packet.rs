@@ -13,7 +13,7 @@
 //! closest hit moved nearer drops the children beyond it. Leaves are tested
 //! ray by ray with the single-ray leaf code (or, for closest hits, one
 //! triangle against the rays at once with the same arithmetic), and an inner
-//! node that at most [`SINGLE_RAYS`] of the packet's rays reach is walked by
+//! node that at most `SINGLE_RAYS` of the packet's rays reach is walked by
 //! each of them alone with the single-ray traversal. Each ray's answer is
 //! therefore the single-ray answer, bit for bit (the tests check it against
 //! brute force).
