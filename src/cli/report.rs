@@ -1,5 +1,5 @@
 //! `rtdiff report perf|convergence|stability|all`: parses the arguments and
-//! prints what [`crate::report::generate`] wrote.
+//! prints what [`crate::report::generate()`] wrote.
 
 use std::path::PathBuf;
 

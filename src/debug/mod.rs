@@ -6,7 +6,7 @@
 //! with the scene's own [`crate::camera::Camera`] and draws them over the
 //! render, depth-tested against the render's first hits (hidden parts dimmed,
 //! not dropped); [`obj`] exports the same lines as an OBJ file for any 3D
-//! viewer. [`heatmap`] draws the per-pixel work of any builder x traversal,
+//! viewer. [`heatmap()`] draws the per-pixel work of any builder x traversal,
 //! counted by the traversal code itself.
 
 pub mod draw;

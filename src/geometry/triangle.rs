@@ -49,7 +49,7 @@ impl std::str::FromStr for TriangleTest {
 
 /// A ray/triangle test chosen by type: the traversals and leaf loops are
 /// generic over it, so each configuration compiles to its own kernel with no
-/// runtime choice of test inside the hot loops ([`with_triangle_kernel`]
+/// runtime choice of test inside the hot loops ([`crate::with_triangle_kernel`]
 /// turns a [`TriangleTest`] value into the type once per query or per tracer).
 pub trait TriangleKernel: Copy + Default + Send + Sync + 'static {
     /// The test as a value (labels, reports).

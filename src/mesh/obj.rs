@@ -1,5 +1,5 @@
 //! Wavefront OBJ meshes, parsed by tobj. tobj reports no line numbers, so when it
-//! rejects a file a second pass over the lines ([`locate`]) finds the first line that
+//! rejects a file a second pass over the lines (`locate`) finds the first line that
 //! breaks tobj's rules and names it with the offending token. The same pass catches what
 //! tobj accepts silently but is wrong (texture or normal index 0).
 

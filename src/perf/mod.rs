@@ -1,5 +1,5 @@
 //! Measurement: clocks ([`clock`]), the builder x traversal benchmark
-//! ([`bench`]), the interleaved race against Embree ([`race`]) and its
+//! ([`bench`](mod@bench)), the interleaved race against Embree ([`race`]) and its
 //! whole-render counterpart ([`render_race`]), and the
 //! reports' measurements: the performance table ([`table`]), run time against
 //! error ([`convergence`]) and numerical stability ([`stability`]). Each

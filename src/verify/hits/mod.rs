@@ -3,7 +3,7 @@
 //! classification of every disagreement ([`classify`]), the exact arbiter that
 //! decides who is right ([`arbiter`], on [`exact`] arithmetic, applied to every
 //! disagreement by [`arbitrate`]), the run over
-//! the ray sets of [`crate::rays`] ([`run`]) and its typed report ([`report`]).
+//! the ray sets of [`crate::rays`] ([`run`](mod@run)) and its typed report ([`report`]).
 
 pub mod arbiter;
 pub mod arbitrate;

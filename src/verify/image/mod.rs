@@ -1,7 +1,7 @@
 //! Image oracle: linear images read and written by [`crate::film::io`], pixel metrics
-//! ([`metrics`]), NVIDIA FLIP ([`flip`]), false-colour difference pictures
+//! ([`metrics`]), NVIDIA FLIP ([`flip`](mod@flip)), false-colour difference pictures
 //! ([`diff_image`]), the statistical test for noisy renders ([`stats`]) and
-//! the whole comparison of two image files ([`compare`]), and whether two
+//! the whole comparison of two image files ([`compare`](mod@compare)), and whether two
 //! tracers render a scene alike ([`agreement`]).
 //! Definitions and formulas: `docs/image-metrics.md`.
 
