@@ -2,7 +2,7 @@
 //! configuration (`bvh-sah/fast`, built by [`crate::backends::build_tracer`]
 //! exactly as users build it) against Embree 4 in every mode a user may pick
 //! (robust and default scene flags, MEDIUM and HIGH quality), on the same
-//! rays, through the same public [`Tracer`] calls (`intersect`, `occluded`,
+//! rays, through the same public [`crate::accel::Tracer`] calls (`intersect`, `occluded`,
 //! and the batch calls `intersect_batch` / `occluded_batch`, which Embree
 //! answers with `rtcIntersect8` / `rtcOccluded8`), on 1 and 2 threads,
 //! interleaved round by round in one process.
@@ -25,10 +25,9 @@ use std::sync::Arc;
 
 use serde::Serialize;
 
-use crate::accel::Tracer;
 use crate::backends::{EmbreeMode, EmbreeQuality};
 use crate::error::Result;
-use crate::geometry::{Hit, Primitives, Ray};
+use crate::geometry::{Primitives, Ray};
 
 use super::clock::quartiles;
 
@@ -148,7 +147,9 @@ pub fn workloads<'a>(sets: &[(&'static str, &'a [Ray], bool)], batches: bool) ->
 }
 
 /// Trace `rays` with `t` the way the workload asks; the number of hits.
-fn run(t: &dyn Tracer, rays: &[Ray], any: bool, batch: bool, threads: usize) -> usize {
+#[cfg(feature = "embree")]
+fn run(t: &dyn crate::accel::Tracer, rays: &[Ray], any: bool, batch: bool, threads: usize) -> usize {
+    use crate::geometry::Hit;
     use rayon::prelude::*;
     // Each thread takes whole slices of this many rays (packets of 8 stay whole).
     let per = rays.len().div_ceil(threads.max(1)).next_multiple_of(8).max(8);
@@ -277,7 +278,7 @@ pub fn race_mesh(
                     std::hint::black_box(chunk.iter().map(|r| r.origin.x + r.dir.x + r.t_max).sum::<f32>());
                     for slot in 0..=m {
                         let k = (slot + round + c) % (m + 1);
-                        let tracer: &dyn Tracer = if k == m { ours.as_ref() } else { &theirs[k] };
+                        let tracer: &dyn crate::accel::Tracer = if k == m { ours.as_ref() } else { &theirs[k] };
                         let (t, h) = pool.install(|| time(&mut || run(tracer, chunk, *any, *batch, threads)));
                         if k == m {
                             ta += t;
