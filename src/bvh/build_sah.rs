@@ -184,18 +184,23 @@ const PARALLEL_BINNING: usize = 1 << 16;
 /// entry `3 k + a` is bin `k` of axis `a`).
 #[inline(always)]
 fn bin_into(refs: &[PrimRef], count: &mut [UVec4], boxes: &mut [BoxA], cmin: Vec3A, scale: Vec3A, lastf: Vec3A) {
-    let nb = count.len();
     for r in refs {
-        let b = r.boxa();
-        let k = bins_of((b.min + b.max) * 0.5, cmin, scale, lastf);
-        for (a, &ka) in k.iter().enumerate() {
-            // bins_of returns values in 0..nb; the clamp only lets the
-            // compiler drop the bounds checks.
-            let ka = ka.min(nb - 1);
-            count[ka][a] += 1;
-            let j = 3 * ka + a;
-            boxes[j] = boxes[j].union(b);
-        }
+        bin_one(r.boxa(), count, boxes, cmin, scale, lastf);
+    }
+}
+
+/// Add the primitive with box `b` to the bins of every axis.
+#[inline(always)]
+fn bin_one(b: BoxA, count: &mut [UVec4], boxes: &mut [BoxA], cmin: Vec3A, scale: Vec3A, lastf: Vec3A) {
+    let nb = count.len();
+    let k = bins_of((b.min + b.max) * 0.5, cmin, scale, lastf);
+    for (a, &ka) in k.iter().enumerate() {
+        // bins_of returns values in 0..nb; the clamp only lets the
+        // compiler drop the bounds checks.
+        let ka = ka.min(nb - 1);
+        count[ka][a] += 1;
+        let j = 3 * ka + a;
+        boxes[j] = boxes[j].union(b);
     }
 }
 
@@ -222,20 +227,9 @@ fn bin_into2(
 ) {
     let pairs = refs.chunks_exact(2);
     let rest = pairs.remainder();
-    let nb = count.len();
     for p in pairs {
-        let (b0, b1) = (p[0].boxa(), p[1].boxa());
-        let k0 = bins_of((b0.min + b0.max) * 0.5, cmin, scale, lastf);
-        let k1 = bins_of((b1.min + b1.max) * 0.5, cmin, scale, lastf);
-        for a in 0..3 {
-            // As in bin_into: the clamps only drop bounds checks.
-            let (i0, i1) = (k0[a].min(nb - 1), k1[a].min(nb - 1));
-            count[i0][a] += 1;
-            count2[i1][a] += 1;
-            let (j0, j1) = (3 * i0 + a, 3 * i1 + a);
-            boxes[j0] = boxes[j0].union(b0);
-            boxes2[j1] = boxes2[j1].union(b1);
-        }
+        bin_one(p[0].boxa(), count, boxes, cmin, scale, lastf);
+        bin_one(p[1].boxa(), count2, boxes2, cmin, scale, lastf);
     }
     bin_into(rest, count, boxes, cmin, scale, lastf);
     count.iter_mut().zip(count2.iter()).for_each(|(x, y)| *x += *y);
@@ -294,8 +288,9 @@ fn partition_hoare(idx: &mut [PrimRef], side: impl Fn(Vec3A) -> u32) -> (usize, 
 /// tree the side is unpredictable, and a branching scan pays a misprediction
 /// for about every other reference. Both sides hold the same references as
 /// with [`partition_hoare`]; only their order inside a side differs, which
-/// changes no split (bins, counts and boxes do not depend on order) and no
-/// answer (ties between primitives go by id).
+/// changes no binned split (bins, counts and boxes do not depend on order;
+/// only the split by count of a node whose centroids all coincide does) and
+/// no answer (ties between primitives go by id).
 #[inline(always)]
 fn partition_branchless(idx: &mut [PrimRef], side: impl Fn(Vec3A) -> u32) -> (usize, BoxA, BoxA) {
     let (mut lcb, mut rcb) = (BoxA::EMPTY, BoxA::EMPTY);
