@@ -205,16 +205,22 @@ mod tests {
     use super::*;
     use crate::scene::Overrides;
 
+    /// scenes/all_features.json at 24x16 and its tracer.
+    fn small_all_features() -> (Scene, Box<dyn crate::accel::Tracer>) {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/all_features.json");
+        let ov = Overrides { width: Some(24), height: Some(16), ..Default::default() };
+        let scene = Scene::load_with(&path, &ov).unwrap();
+        let tracer = crate::backends::build_tracer(scene.prims.clone(), &scene.accel).unwrap();
+        (scene, tracer)
+    }
+
     /// Rows rendered with batched camera and shadow rays are bit-identical
     /// to pixels rendered one by one ([`render_pixel`], single rays), with
     /// every feature on (depth of field, 4 samples, transparency, glossy,
     /// area lights), and count the same work.
     #[test]
     fn batched_rows_equal_single_pixels() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/all_features.json");
-        let ov = Overrides { width: Some(24), height: Some(16), ..Default::default() };
-        let scene = Scene::load_with(&path, &ov).unwrap();
-        let tracer = crate::backends::build_tracer(scene.prims.clone(), &scene.accel).unwrap();
+        let (scene, tracer) = small_all_features();
         let plan = scene.plan();
         let integ = integrator::create(&scene, tracer.as_ref(), plan);
         let (mut ca, mut cb) = (Counters::default(), Counters::default());
@@ -235,10 +241,7 @@ mod tests {
     /// debug recorder follows.
     #[test]
     fn batched_shadow_rays_equal_the_recorded_walk() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/all_features.json");
-        let ov = Overrides { width: Some(24), height: Some(16), ..Default::default() };
-        let scene = Scene::load_with(&path, &ov).unwrap();
-        let tracer = crate::backends::build_tracer(scene.prims.clone(), &scene.accel).unwrap();
+        let (scene, tracer) = small_all_features();
         let w = integrator::Whitted::new(&scene, tracer.as_ref(), scene.plan());
         let (mut ca, mut cb) = (Counters::default(), Counters::default());
         for y in 0..scene.height {

@@ -393,7 +393,8 @@ macro_rules! any_hit {
             // subtree is the nearest and cannot occlude it. (Same answers in
             // any order; fewer nodes and leaves per shadow ray for lights on
             // every side, `examples/traversal_counts.rs`.)
-            let mut inner = mask & node.inner_lanes();
+            // (A node that one child or none is entered in needs no choice.)
+            let mut inner = if mask & mask.wrapping_sub(1) != 0 { mask & node.inner_lanes() } else { 0 };
             if inner & inner.wrapping_sub(1) != 0 {
                 let mut first = inner.trailing_zeros() as usize;
                 inner &= inner - 1;
