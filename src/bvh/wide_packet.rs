@@ -10,9 +10,11 @@
 //! the same subtractions, multiplications and NaN-ignoring `max`/`min` in the
 //! same order), so a ray enters exactly the boxes it would enter alone, and
 //! each stacked child keeps its rays' own entry distances, so a ray whose
-//! closest hit moved nearer drops the children beyond it. Leaves are tested
-//! ray by ray with the single-ray leaf code (or, for closest hits, one
-//! triangle against the rays at once with the same arithmetic), and an inner
+//! closest hit moved nearer drops the children beyond it. A leaf that most
+//! of the packet's rays reach (and whose rays share the watertight test's
+//! axis permutation) is tested one triangle against the rays at once, with
+//! the single-ray arithmetic lane for lane; other leaves are tested ray by
+//! ray with the single-ray leaf code, and an inner
 //! node that at most `SINGLE_RAYS` of the packet's rays reach is walked by
 //! each of them alone with the single-ray traversal. Each ray's answer is
 //! therefore the single-ray answer, bit for bit (the tests check it against
@@ -195,99 +197,103 @@ const SOA_LEAF_RAYS: u32 = 6;
 /// u, v` are the scalar routine's bits; uncertain lanes (an edge sign within
 /// `SIGN_MARGIN` bounds of 0, or a distance not provably positive) must be
 /// decided by the scalar routine.
+///
+/// # Safety
+/// The CPU must have AVX2 (the callers are AVX2 functions, into which this is inlined).
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-#[inline]
-fn tri_x8(
+#[inline(always)]
+unsafe fn tri_x8(
     sh: &Sheared,
     p: &super::packet::Tri4,
     l: usize,
     t_max: std::arch::x86_64::__m256,
 ) -> (u32, u32, [f32; PACKET], [f32; PACKET], [f32; PACKET]) {
-    use std::arch::x86_64::*;
-    let [kx, ky, kz] = sh.k;
-    let [ox, oy, oz] = sh.o;
-    let [sx, sy, sz] = sh.s;
-    // Coordinate `a` of vertex `j` of the packet's lane `l`, in every lane.
-    let b = |j: usize, a: usize| _mm256_set1_ps(p.v[3 * j + a][l]);
-    // a = v0 - o, b = v1 - o, c = v2 - o on the permuted axes.
-    let (a_x, a_y, a_z) = (_mm256_sub_ps(b(0, kx), ox), _mm256_sub_ps(b(0, ky), oy), _mm256_sub_ps(b(0, kz), oz));
-    let (b_x, b_y, b_z) = (_mm256_sub_ps(b(1, kx), ox), _mm256_sub_ps(b(1, ky), oy), _mm256_sub_ps(b(1, kz), oz));
-    let (c_x, c_y, c_z) = (_mm256_sub_ps(b(2, kx), ox), _mm256_sub_ps(b(2, ky), oy), _mm256_sub_ps(b(2, kz), oz));
-    let ax = _mm256_sub_ps(a_x, _mm256_mul_ps(sx, a_z));
-    let ay = _mm256_sub_ps(a_y, _mm256_mul_ps(sy, a_z));
-    let bx = _mm256_sub_ps(b_x, _mm256_mul_ps(sx, b_z));
-    let by = _mm256_sub_ps(b_y, _mm256_mul_ps(sy, b_z));
-    let cx = _mm256_sub_ps(c_x, _mm256_mul_ps(sx, c_z));
-    let cy = _mm256_sub_ps(c_y, _mm256_mul_ps(sy, c_z));
-    let e0 = _mm256_sub_ps(_mm256_mul_ps(cx, by), _mm256_mul_ps(cy, bx));
-    let e1 = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));
-    let e2 = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
-    let z = _mm256_setzero_ps();
-    let az = _mm256_mul_ps(sz, a_z);
-    let bz = _mm256_mul_ps(sz, b_z);
-    let cz = _mm256_mul_ps(sz, c_z);
-    // The edge functions' error bound (`watertight_e_error`, same operation order).
-    let sign = _mm256_set1_ps(-0.0);
-    let abs = |x: __m256| _mm256_andnot_ps(sign, x);
-    let max3 = |x: __m256, y: __m256, w: __m256| _mm256_max_ps(_mm256_max_ps(abs(x), abs(y)), abs(w));
-    let (max_xt, max_yt, max_zt) = (max3(ax, bx, cx), max3(ay, by, cy), max3(az, bz, cz));
-    let (g2, g3, g5) = (_mm256_set1_ps(gamma(2)), _mm256_set1_ps(gamma(3)), _mm256_set1_ps(gamma(5)));
-    let delta_x = _mm256_mul_ps(g5, _mm256_add_ps(max_xt, max_zt));
-    let delta_y = _mm256_mul_ps(g5, _mm256_add_ps(max_yt, max_zt));
-    let delta_e = _mm256_mul_ps(
-        _mm256_set1_ps(2.0),
-        _mm256_add_ps(
-            _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(g2, max_xt), max_yt), _mm256_mul_ps(delta_y, max_xt)),
-            _mm256_mul_ps(delta_x, max_yt),
-        ),
-    );
-    let min_e = _mm256_min_ps(_mm256_min_ps(abs(e0), abs(e1)), abs(e2));
-    let uncertain = _mm256_cmp_ps::<_CMP_LE_OS>(min_e, _mm256_mul_ps(_mm256_set1_ps(SIGN_MARGIN), delta_e));
-    let neg = _mm256_or_ps(
-        _mm256_or_ps(_mm256_cmp_ps::<_CMP_LT_OS>(e0, z), _mm256_cmp_ps::<_CMP_LT_OS>(e1, z)),
-        _mm256_cmp_ps::<_CMP_LT_OS>(e2, z),
-    );
-    let pos = _mm256_or_ps(
-        _mm256_or_ps(_mm256_cmp_ps::<_CMP_GT_OS>(e0, z), _mm256_cmp_ps::<_CMP_GT_OS>(e1, z)),
-        _mm256_cmp_ps::<_CMP_GT_OS>(e2, z),
-    );
-    let det = _mm256_add_ps(_mm256_add_ps(e0, e1), e2);
-    let t_scaled = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(e0, az), _mm256_mul_ps(e1, bz)), _mm256_mul_ps(e2, cz));
-    let inv_det = _mm256_div_ps(_mm256_set1_ps(1.0), det);
-    let t = _mm256_mul_ps(t_scaled, inv_det);
-    // Ordered comparisons: a NaN t fails both, as `!(t >= t_min && t <= t_max)` rejects it.
-    let in_range = _mm256_and_ps(_mm256_cmp_ps::<_CMP_GE_OS>(t, sh.t_min), _mm256_cmp_ps::<_CMP_LE_OS>(t, t_max));
-    let reject = _mm256_or_ps(_mm256_and_ps(neg, pos), uncertain);
-    let ok = _mm256_andnot_ps(reject, in_range);
-    let zero_mask = _mm256_movemask_ps(uncertain) as u32;
-    if _mm256_movemask_ps(ok) == 0 {
-        return (0, zero_mask, [0.0; PACKET], [0.0; PACKET], [0.0; PACKET]);
-    }
-    // The provably-positive-t check of `watertight_t_error` (pbrt-v4 6.8.7), same operation order.
-    let delta_z = _mm256_mul_ps(g3, max_zt);
-    let max_e = max3(e0, e1, e2);
-    let t_err = _mm256_mul_ps(
-        _mm256_mul_ps(
-            _mm256_set1_ps(3.0),
-            _mm256_add_ps(
-                _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(g3, max_e), max_zt), _mm256_mul_ps(delta_e, max_zt)),
-                _mm256_mul_ps(delta_z, max_e),
-            ),
-        ),
-        abs(inv_det),
-    );
-    let not_positive = _mm256_and_ps(_mm256_cmp_ps::<_CMP_LE_OS>(t, t_err), ok);
-    let ok = _mm256_andnot_ps(not_positive, ok);
-    let zero_mask = zero_mask | _mm256_movemask_ps(not_positive) as u32;
-    let (mut ts, mut us, mut vs) = ([0.0f32; PACKET], [0.0f32; PACKET], [0.0f32; PACKET]);
-    // SAFETY: each array has room for 8 floats; storeu has no alignment requirement.
+    // SAFETY: AVX2 is guaranteed by the caller (see above); the stores are justified where they occur.
     unsafe {
+        use std::arch::x86_64::*;
+        let [kx, ky, kz] = sh.k;
+        let [ox, oy, oz] = sh.o;
+        let [sx, sy, sz] = sh.s;
+        // Coordinate `a` of vertex `j` of the packet's lane `l`, in every lane.
+        let b = |j: usize, a: usize| _mm256_set1_ps(p.v[3 * j + a][l]);
+        // a = v0 - o, b = v1 - o, c = v2 - o on the permuted axes.
+        let (a_x, a_y, a_z) = (_mm256_sub_ps(b(0, kx), ox), _mm256_sub_ps(b(0, ky), oy), _mm256_sub_ps(b(0, kz), oz));
+        let (b_x, b_y, b_z) = (_mm256_sub_ps(b(1, kx), ox), _mm256_sub_ps(b(1, ky), oy), _mm256_sub_ps(b(1, kz), oz));
+        let (c_x, c_y, c_z) = (_mm256_sub_ps(b(2, kx), ox), _mm256_sub_ps(b(2, ky), oy), _mm256_sub_ps(b(2, kz), oz));
+        let ax = _mm256_sub_ps(a_x, _mm256_mul_ps(sx, a_z));
+        let ay = _mm256_sub_ps(a_y, _mm256_mul_ps(sy, a_z));
+        let bx = _mm256_sub_ps(b_x, _mm256_mul_ps(sx, b_z));
+        let by = _mm256_sub_ps(b_y, _mm256_mul_ps(sy, b_z));
+        let cx = _mm256_sub_ps(c_x, _mm256_mul_ps(sx, c_z));
+        let cy = _mm256_sub_ps(c_y, _mm256_mul_ps(sy, c_z));
+        let e0 = _mm256_sub_ps(_mm256_mul_ps(cx, by), _mm256_mul_ps(cy, bx));
+        let e1 = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));
+        let e2 = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
+        let z = _mm256_setzero_ps();
+        let az = _mm256_mul_ps(sz, a_z);
+        let bz = _mm256_mul_ps(sz, b_z);
+        let cz = _mm256_mul_ps(sz, c_z);
+        // The edge functions' error bound (`watertight_e_error`, same operation order).
+        let sign = _mm256_set1_ps(-0.0);
+        let abs = |x: __m256| _mm256_andnot_ps(sign, x);
+        let max3 = |x: __m256, y: __m256, w: __m256| _mm256_max_ps(_mm256_max_ps(abs(x), abs(y)), abs(w));
+        let (max_xt, max_yt, max_zt) = (max3(ax, bx, cx), max3(ay, by, cy), max3(az, bz, cz));
+        let (g2, g3, g5) = (_mm256_set1_ps(gamma(2)), _mm256_set1_ps(gamma(3)), _mm256_set1_ps(gamma(5)));
+        let delta_x = _mm256_mul_ps(g5, _mm256_add_ps(max_xt, max_zt));
+        let delta_y = _mm256_mul_ps(g5, _mm256_add_ps(max_yt, max_zt));
+        let delta_e = _mm256_mul_ps(
+            _mm256_set1_ps(2.0),
+            _mm256_add_ps(
+                _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(g2, max_xt), max_yt), _mm256_mul_ps(delta_y, max_xt)),
+                _mm256_mul_ps(delta_x, max_yt),
+            ),
+        );
+        let min_e = _mm256_min_ps(_mm256_min_ps(abs(e0), abs(e1)), abs(e2));
+        let uncertain = _mm256_cmp_ps::<_CMP_LE_OS>(min_e, _mm256_mul_ps(_mm256_set1_ps(SIGN_MARGIN), delta_e));
+        let neg = _mm256_or_ps(
+            _mm256_or_ps(_mm256_cmp_ps::<_CMP_LT_OS>(e0, z), _mm256_cmp_ps::<_CMP_LT_OS>(e1, z)),
+            _mm256_cmp_ps::<_CMP_LT_OS>(e2, z),
+        );
+        let pos = _mm256_or_ps(
+            _mm256_or_ps(_mm256_cmp_ps::<_CMP_GT_OS>(e0, z), _mm256_cmp_ps::<_CMP_GT_OS>(e1, z)),
+            _mm256_cmp_ps::<_CMP_GT_OS>(e2, z),
+        );
+        let det = _mm256_add_ps(_mm256_add_ps(e0, e1), e2);
+        let t_scaled =
+            _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(e0, az), _mm256_mul_ps(e1, bz)), _mm256_mul_ps(e2, cz));
+        let inv_det = _mm256_div_ps(_mm256_set1_ps(1.0), det);
+        let t = _mm256_mul_ps(t_scaled, inv_det);
+        // Ordered comparisons: a NaN t fails both, as `!(t >= t_min && t <= t_max)` rejects it.
+        let in_range = _mm256_and_ps(_mm256_cmp_ps::<_CMP_GE_OS>(t, sh.t_min), _mm256_cmp_ps::<_CMP_LE_OS>(t, t_max));
+        let reject = _mm256_or_ps(_mm256_and_ps(neg, pos), uncertain);
+        let ok = _mm256_andnot_ps(reject, in_range);
+        let zero_mask = _mm256_movemask_ps(uncertain) as u32;
+        if _mm256_movemask_ps(ok) == 0 {
+            return (0, zero_mask, [0.0; PACKET], [0.0; PACKET], [0.0; PACKET]);
+        }
+        // The provably-positive-t check of `watertight_t_error` (pbrt-v4 6.8.7), same operation order.
+        let delta_z = _mm256_mul_ps(g3, max_zt);
+        let max_e = max3(e0, e1, e2);
+        let t_err = _mm256_mul_ps(
+            _mm256_mul_ps(
+                _mm256_set1_ps(3.0),
+                _mm256_add_ps(
+                    _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(g3, max_e), max_zt), _mm256_mul_ps(delta_e, max_zt)),
+                    _mm256_mul_ps(delta_z, max_e),
+                ),
+            ),
+            abs(inv_det),
+        );
+        let not_positive = _mm256_and_ps(_mm256_cmp_ps::<_CMP_LE_OS>(t, t_err), ok);
+        let ok = _mm256_andnot_ps(not_positive, ok);
+        let zero_mask = zero_mask | _mm256_movemask_ps(not_positive) as u32;
+        let (mut ts, mut us, mut vs) = ([0.0f32; PACKET], [0.0f32; PACKET], [0.0f32; PACKET]);
+        // Each array has room for 8 floats; storeu has no alignment requirement.
         _mm256_storeu_ps(ts.as_mut_ptr(), t);
         _mm256_storeu_ps(us.as_mut_ptr(), _mm256_mul_ps(e1, inv_det));
         _mm256_storeu_ps(vs.as_mut_ptr(), _mm256_mul_ps(e2, inv_det));
+        (_mm256_movemask_ps(ok) as u32, zero_mask, ts, us, vs)
     }
-    (_mm256_movemask_ps(ok) as u32, zero_mask, ts, us, vs)
 }
 
 /// Closest hits of up to [`PACKET`] rays, answers into `out` (same length).
@@ -382,7 +388,7 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, 
         } else if K::WATERTIGHT
             && cur.count & ENTRY_LEAF == 0
             && cur_mask.count_ones() >= SOA_LEAF_RAYS
-            && let Some(sh) = sheared.get_or_insert_with(|| shear8(&r, &mut wr)).as_ref()
+            && let Some(sh) = sheared.get_or_insert_with(|| shear8(&r)).as_ref()
             && let Some(pk) = &bvh.packets
         {
             // One triangle against all the rays at once.
@@ -394,13 +400,14 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, 
             for k in 0..c {
                 let p = &pk.packets[cur.child as usize + k / super::packet::PW];
                 let l = k % super::packet::PW;
-                let (ok, unc, t, u, vv) = tri_x8(sh, p, l, t_max);
+                // SAFETY: closest8 runs on AVX2 CPUs only.
+                let (ok, unc, t, u, vv) = unsafe { tri_x8(sh, p, l, t_max) };
                 let (mut ok, mut unc) = (ok & cur_mask, unc & cur_mask);
                 let mut closer = false;
                 while unc != 0 {
                     let i = unc.trailing_zeros() as usize;
                     unc &= unc - 1;
-                    let w = wr[i].as_ref().expect("made by shear8");
+                    let w = wr[i].get_or_insert_with(|| WatertightRay::new(r[i].dir));
                     let v = [0, 1, 2].map(|j| Vec3::new(p.v[3 * j][l], p.v[3 * j + 1][l], p.v[3 * j + 2][l]));
                     if let Some((t, u, v2)) = intersect_watertight(&r[i], w, v[0], v[1], v[2]) {
                         closer |= Hit::offer(&mut best[i], &mut r[i], Hit { t, prim: p.id[l], u, v: v2 });
@@ -470,25 +477,46 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, 
     }
 }
 
-/// The shear of every ray (into `wr`), and the packet as [`Sheared`] when
-/// all eight rays share the axis permutation.
+/// The packet as [`Sheared`] when all eight rays share the axis
+/// permutation of the watertight test: [`WatertightRay::new`] lane for lane
+/// (the same axis choice, and the same divisions, so the same bits).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn shear8(r: &[Ray; PACKET], wr: &mut [Option<WatertightRay>; PACKET]) -> Option<Sheared> {
+fn shear8(r: &[Ray; PACKET]) -> Option<Sheared> {
     use std::arch::x86_64::*;
-    let w: [WatertightRay; PACKET] =
-        std::array::from_fn(|i| *wr[i].get_or_insert_with(|| WatertightRay::new(r[i].dir)));
-    let k = w[0].k;
-    if w.iter().any(|x| x.k != k) {
-        return None;
+    // Rows of eight lanes gathered in memory, then loaded once each.
+    let (mut d, mut o, mut t_min) = ([[0.0f32; PACKET]; 3], [[0.0f32; PACKET]; 3], [0.0f32; PACKET]);
+    for i in 0..PACKET {
+        for a in 0..3 {
+            d[a][i] = r[i].dir[a];
+            o[a][i] = r[i].origin[a];
+        }
+        t_min[i] = r[i].t_min;
     }
-    let lanes = |f: &dyn Fn(usize) -> f32| _mm256_setr_ps(f(0), f(1), f(2), f(3), f(4), f(5), f(6), f(7));
-    Some(Sheared {
-        k,
-        o: [0, 1, 2].map(|a| lanes(&|i| r[i].origin[k[a]])),
-        s: [lanes(&|i| w[i].s.x), lanes(&|i| w[i].s.y), lanes(&|i| w[i].s.z)],
-        t_min: lanes(&|i| r[i].t_min),
-    })
+    // SAFETY: each row holds 8 floats; loadu has no alignment requirement.
+    let ld = |row: &[f32; PACKET]| unsafe { _mm256_loadu_ps(row.as_ptr()) };
+    let d = d.each_ref().map(ld);
+    let sign = _mm256_set1_ps(-0.0);
+    let [ax, ay, az] = d.map(|x| _mm256_andnot_ps(sign, x));
+    // kz = 0 where |x| >= |y| and |x| >= |z|, else 1 where |y| >= |z|, else 2.
+    let x_major = _mm256_and_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(ax, ay), _mm256_cmp_ps::<_CMP_GE_OQ>(ax, az));
+    let y_major = _mm256_cmp_ps::<_CMP_GE_OQ>(ay, az);
+    let kz = match (_mm256_movemask_ps(x_major), _mm256_movemask_ps(_mm256_andnot_ps(x_major, y_major))) {
+        (0xff, _) => 0,
+        (0, 0xff) => 1,
+        (0, 0) => 2,
+        _ => return None,
+    };
+    let dz = d[kz];
+    let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
+    match _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(dz, _mm256_setzero_ps())) {
+        0 => {}
+        0xff => std::mem::swap(&mut kx, &mut ky),
+        _ => return None,
+    }
+    let s = [_mm256_div_ps(d[kx], dz), _mm256_div_ps(d[ky], dz), _mm256_div_ps(_mm256_set1_ps(1.0), dz)];
+    let k = [kx, ky, kz];
+    Some(Sheared { k, o: k.map(|a| ld(&o[a])), s, t_min: ld(&t_min) })
 }
 
 /// A packet entry (an inner node) with at most this many of its rays still
@@ -515,6 +543,8 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, rays
     // SAFETY: the Soa row is aligned.
     let cull = unsafe { _mm256_load_ps(soa.cull.as_ptr()) };
     let mut wr: [Option<WatertightRay>; PACKET] = [None; PACKET];
+    // Made at the first leaf that enough rays reach: None when the rays do not share an axis permutation.
+    let mut sheared: Option<Option<(Sheared, __m256)>> = None;
     // Rays still looking for an occluder.
     let mut open = if n == PACKET { 0xff } else { (1u32 << n) - 1 };
     let all = open;
@@ -578,6 +608,49 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, rays
                 continue;
             }
             let c = count & !ENTRY_LEAF;
+            if K::WATERTIGHT
+                && count & ENTRY_LEAF == 0
+                && m.count_ones() >= SOA_LEAF_RAYS
+                && let Some((sh, t_max)) = sheared
+                    .get_or_insert_with(|| {
+                        let r: [Ray; PACKET] = std::array::from_fn(|i| rays[i.min(n - 1)]);
+                        let t_max = _mm256_setr_ps(
+                            r[0].t_max, r[1].t_max, r[2].t_max, r[3].t_max, r[4].t_max, r[5].t_max, r[6].t_max,
+                            r[7].t_max,
+                        );
+                        shear8(&r).map(|sh| (sh, t_max))
+                    })
+                    .as_ref()
+                && let Some(pk) = &bvh.packets
+            {
+                // One triangle against all the leaf's rays at once; a ray
+                // leaves the leaf at its first occluder (any occluder will do:
+                // the answer is a yes or no).
+                for k in 0..c as usize {
+                    let p = &pk.packets[node.child[l] as usize + k / super::packet::PW];
+                    let pl = k % super::packet::PW;
+                    // SAFETY: any8 runs on AVX2 CPUs only.
+                    let (ok, unc, _, _, _) = unsafe { tri_x8(sh, p, pl, *t_max) };
+                    let mut hit = ok & m;
+                    let mut unc = unc & m & !hit;
+                    while unc != 0 {
+                        let i = unc.trailing_zeros() as usize;
+                        unc &= unc - 1;
+                        let w = wr[i].get_or_insert_with(|| WatertightRay::new(rays[i].dir));
+                        let v = [0, 1, 2].map(|j| Vec3::new(p.v[3 * j][pl], p.v[3 * j + 1][pl], p.v[3 * j + 2][pl]));
+                        if intersect_watertight(&rays[i], w, v[0], v[1], v[2]).is_some() {
+                            hit |= 1 << i;
+                        }
+                    }
+                    m &= !hit;
+                    open &= !hit;
+                    if m == 0 {
+                        break;
+                    }
+                }
+                // The rays left have no occluder in this leaf.
+                m = 0;
+            }
             while m != 0 {
                 let i = m.trailing_zeros() as usize;
                 m &= m - 1;
