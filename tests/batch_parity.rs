@@ -33,7 +33,39 @@ fn rays_for(prims: &Arc<Primitives>) -> Vec<Ray> {
     let mut rays = camera;
     rays.extend(shadow);
     rays.extend(rtdiff::rays::mixed_rays(prims, 6_000, 17));
+    rays.extend(diagonal_fans(prims));
     rays
+}
+
+/// Camera-like fans of rays around the two space diagonals (towards `-(1, 1,
+/// 1)` and `+(1, 1, 1)`), rows of 8 neighbouring rays aimed at the scene:
+/// their largest direction component changes from ray to ray, so packets
+/// whose rays need different axis permutations in the watertight test reach
+/// the same leaves together (the packet test's per-lane permutations), with
+/// direction components all negative in one fan (the permutation's swap) and
+/// all positive in the other. Plus their shadow rays towards a light on the
+/// diagonal.
+fn diagonal_fans(prims: &Arc<Primitives>) -> Vec<Ray> {
+    let b = (0..prims.len()).map(|i| prims.bounds(i)).reduce(|a, b| a.union(b)).expect("a non-empty scene");
+    let (c, r) = (b.center(), b.extent().length() * 0.5);
+    let diag = Vec3::ONE.normalize();
+    let (u, v) = (Vec3::new(1.0, -1.0, 0.0).normalize(), Vec3::new(1.0, 1.0, -2.0).normalize());
+    let mut fans = Vec::new();
+    for side in [1.0f32, -1.0] {
+        let origin = c + side * 2.5 * r * diag;
+        for y in 0..32 {
+            for x in 0..64 {
+                let (dx, dy) = ((x as f32 - 31.5) / 160.0, (y as f32 - 15.5) / 80.0);
+                fans.push(Ray::new(origin, (-side * diag + dx * u + dy * v).normalize()));
+            }
+        }
+    }
+    let brute = BruteForce::new(prims.clone(), TriangleTest::Watertight);
+    let hits: Vec<Option<Hit>> = fans.iter().map(|r| brute.intersect(r)).collect();
+    let light = c + 3.0 * r * diag;
+    let shadow = rtdiff::rays::shadow_rays(prims, &fans, &hits, light, SpawnOffset::Robust);
+    fans.extend(shadow);
+    fans
 }
 
 fn check_batches(label: &str, t: &dyn Tracer, rays: &[Ray], truth: &[Option<Hit>]) {

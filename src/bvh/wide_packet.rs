@@ -175,14 +175,45 @@ macro_rules! hmin {
     }};
 }
 
-/// The packet's rays as the watertight test sees them, when they share its
-/// axis permutation: per ray, the origin on the permuted axes and the shear.
+/// The packet's rays as the watertight test sees them: per ray, the origin
+/// on the ray's permuted axes and its shear.
 #[cfg(target_arch = "x86_64")]
 struct Sheared {
+    /// The rays' common axis permutation (unused when `mixed` is set).
     k: [usize; 3],
+    /// When the rays' permutations differ: per permuted axis `j`, the lanes
+    /// whose axis `j` is `y` (`[j][0]`) and `z` (`[j][1]`), as blend masks.
+    mixed: Option<[[std::arch::x86_64::__m256; 2]; 3]>,
     o: [std::arch::x86_64::__m256; 3],
     s: [std::arch::x86_64::__m256; 3],
     t_min: std::arch::x86_64::__m256,
+}
+
+/// Vertex `j` of lane `l` of `p` on each ray's permuted axes, the rays'
+/// permutations given as [`Sheared::mixed`] blend masks.
+///
+/// # Safety
+/// The CPU must have AVX2 (inlined into AVX2 functions only).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn permuted(
+    sel: &[[std::arch::x86_64::__m256; 2]; 3],
+    p: &super::packet::Tri4,
+    l: usize,
+    j: usize,
+) -> [std::arch::x86_64::__m256; 3] {
+    use std::arch::x86_64::*;
+    // SAFETY: AVX2 is guaranteed by the caller.
+    unsafe {
+        let x = _mm256_set1_ps(p.v[3 * j][l]);
+        let y = _mm256_set1_ps(p.v[3 * j + 1][l]);
+        let z = _mm256_set1_ps(p.v[3 * j + 2][l]);
+        [
+            _mm256_blendv_ps(_mm256_blendv_ps(x, y, sel[0][0]), z, sel[0][1]),
+            _mm256_blendv_ps(_mm256_blendv_ps(x, y, sel[1][0]), z, sel[1][1]),
+            _mm256_blendv_ps(_mm256_blendv_ps(x, y, sel[2][0]), z, sel[2][1]),
+        ]
+    }
 }
 
 /// Leaves whose triangles are tested against this many of the packet's rays
@@ -216,10 +247,16 @@ unsafe fn tri_x8(
         let [sx, sy, sz] = sh.s;
         // Coordinate `a` of vertex `j` of the packet's lane `l`, in every lane.
         let b = |j: usize, a: usize| _mm256_set1_ps(p.v[3 * j + a][l]);
+        // The vertices on each ray's permuted axes.
+        let ([v0x, v0y, v0z], [v1x, v1y, v1z], [v2x, v2y, v2z]) = if let Some(sel) = &sh.mixed {
+            (permuted(sel, p, l, 0), permuted(sel, p, l, 1), permuted(sel, p, l, 2))
+        } else {
+            ([b(0, kx), b(0, ky), b(0, kz)], [b(1, kx), b(1, ky), b(1, kz)], [b(2, kx), b(2, ky), b(2, kz)])
+        };
         // a = v0 - o, b = v1 - o, c = v2 - o on the permuted axes.
-        let (a_x, a_y, a_z) = (_mm256_sub_ps(b(0, kx), ox), _mm256_sub_ps(b(0, ky), oy), _mm256_sub_ps(b(0, kz), oz));
-        let (b_x, b_y, b_z) = (_mm256_sub_ps(b(1, kx), ox), _mm256_sub_ps(b(1, ky), oy), _mm256_sub_ps(b(1, kz), oz));
-        let (c_x, c_y, c_z) = (_mm256_sub_ps(b(2, kx), ox), _mm256_sub_ps(b(2, ky), oy), _mm256_sub_ps(b(2, kz), oz));
+        let (a_x, a_y, a_z) = (_mm256_sub_ps(v0x, ox), _mm256_sub_ps(v0y, oy), _mm256_sub_ps(v0z, oz));
+        let (b_x, b_y, b_z) = (_mm256_sub_ps(v1x, ox), _mm256_sub_ps(v1y, oy), _mm256_sub_ps(v1z, oz));
+        let (c_x, c_y, c_z) = (_mm256_sub_ps(v2x, ox), _mm256_sub_ps(v2y, oy), _mm256_sub_ps(v2z, oz));
         let ax = _mm256_sub_ps(a_x, _mm256_mul_ps(sx, a_z));
         let ay = _mm256_sub_ps(a_y, _mm256_mul_ps(sy, a_z));
         let bx = _mm256_sub_ps(b_x, _mm256_mul_ps(sx, b_z));
@@ -310,8 +347,8 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, 
     let mut r: [Ray; PACKET] = std::array::from_fn(|i| rays[i.min(n - 1)]);
     let mut best: [Option<Hit>; PACKET] = [None; PACKET];
     let mut wr: [Option<WatertightRay>; PACKET] = [None; PACKET];
-    // Made at the first leaf that enough rays reach: None when the rays do not share an axis permutation.
-    let mut sheared: Option<Option<Sheared>> = None;
+    // Made at the first leaf that enough rays reach.
+    let mut sheared: Option<Sheared> = None;
     let lanes = if n == PACKET { u32::MAX } else { (1u32 << n) - 1 };
     // SAFETY: the Soa row is aligned.
     let mut cull = unsafe { _mm256_load_ps(soa.cull.as_ptr()) };
@@ -388,10 +425,10 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, 
         } else if K::WATERTIGHT
             && cur.count & ENTRY_LEAF == 0
             && cur_mask.count_ones() >= SOA_LEAF_RAYS
-            && let Some(sh) = sheared.get_or_insert_with(|| shear8(&r)).as_ref()
             && let Some(pk) = &bvh.packets
         {
             // One triangle against all the rays at once.
+            let sh = sheared.get_or_insert_with(|| shear8(&r));
             let c = cur.count as usize;
             let mut changed = false;
             let mut t_max = _mm256_setr_ps(
@@ -477,12 +514,12 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, 
     }
 }
 
-/// The packet as [`Sheared`] when all eight rays share the axis
-/// permutation of the watertight test: [`WatertightRay::new`] lane for lane
-/// (the same axis choice, and the same divisions, so the same bits).
+/// The packet as [`Sheared`]: per ray the axis permutation of
+/// [`WatertightRay::new`] (the same axis choice) and its shear (the same
+/// divisions, lane for lane, so the same bits).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn shear8(r: &[Ray; PACKET]) -> Option<Sheared> {
+fn shear8(r: &[Ray; PACKET]) -> Sheared {
     use std::arch::x86_64::*;
     // Rows of eight lanes gathered in memory, then loaded once each.
     let (mut d, mut o, mut t_min) = ([[0.0f32; PACKET]; 3], [[0.0f32; PACKET]; 3], [0.0f32; PACKET]);
@@ -495,28 +532,45 @@ fn shear8(r: &[Ray; PACKET]) -> Option<Sheared> {
     }
     // SAFETY: each row holds 8 floats; loadu has no alignment requirement.
     let ld = |row: &[f32; PACKET]| unsafe { _mm256_loadu_ps(row.as_ptr()) };
-    let d = d.each_ref().map(ld);
+    let (d, o, t_min) = (d.each_ref().map(ld), o.each_ref().map(ld), ld(&t_min));
     let sign = _mm256_set1_ps(-0.0);
     let [ax, ay, az] = d.map(|x| _mm256_andnot_ps(sign, x));
     // kz = 0 where |x| >= |y| and |x| >= |z|, else 1 where |y| >= |z|, else 2.
-    let x_major = _mm256_and_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(ax, ay), _mm256_cmp_ps::<_CMP_GE_OQ>(ax, az));
-    let y_major = _mm256_cmp_ps::<_CMP_GE_OQ>(ay, az);
-    let kz = match (_mm256_movemask_ps(x_major), _mm256_movemask_ps(_mm256_andnot_ps(x_major, y_major))) {
-        (0xff, _) => 0,
-        (0, 0xff) => 1,
-        (0, 0) => 2,
-        _ => return None,
-    };
-    let dz = d[kz];
-    let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
-    match _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(dz, _mm256_setzero_ps())) {
-        0 => {}
-        0xff => std::mem::swap(&mut kx, &mut ky),
-        _ => return None,
+    let z0 = _mm256_and_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(ax, ay), _mm256_cmp_ps::<_CMP_GE_OQ>(ax, az));
+    let z1 = _mm256_andnot_ps(z0, _mm256_cmp_ps::<_CMP_GE_OQ>(ay, az));
+    let z2 = _mm256_andnot_ps(_mm256_or_ps(z0, z1), _mm256_castsi256_ps(_mm256_set1_epi32(-1)));
+    let dz = _mm256_blendv_ps(_mm256_blendv_ps(d[0], d[1], z1), d[2], z2);
+    // kx = kz + 1 and ky = kz + 2 (mod 3), swapped where dir[kz] < 0.
+    let neg = _mm256_cmp_ps::<_CMP_LT_OQ>(dz, _mm256_setzero_ps());
+    let uniform = |m: __m256| matches!(_mm256_movemask_ps(m), 0 | 0xff);
+    if uniform(z0) && uniform(z1) && uniform(neg) {
+        let kz = if _mm256_movemask_ps(z0) != 0 {
+            0
+        } else if _mm256_movemask_ps(z1) != 0 {
+            1
+        } else {
+            2
+        };
+        let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
+        if _mm256_movemask_ps(neg) != 0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        let s = [_mm256_div_ps(d[kx], dz), _mm256_div_ps(d[ky], dz), _mm256_div_ps(_mm256_set1_ps(1.0), dz)];
+        return Sheared { k: [kx, ky, kz], mixed: None, o: [o[kx], o[ky], o[kz]], s, t_min };
     }
-    let s = [_mm256_div_ps(d[kx], dz), _mm256_div_ps(d[ky], dz), _mm256_div_ps(_mm256_set1_ps(1.0), dz)];
-    let k = [kx, ky, kz];
-    Some(Sheared { k, o: k.map(|a| ld(&o[a])), s, t_min: ld(&t_min) })
+    // Per lane: axis kx is y where kz = 0 (z where kz = 1), axis ky is z where
+    // kz = 0 (y where kz = 2); the two trade places where dir[kz] < 0.
+    let (x_is_y, x_is_z, y_is_y, y_is_z) = (z0, z1, z2, z0);
+    let sel = [
+        [_mm256_blendv_ps(x_is_y, y_is_y, neg), _mm256_blendv_ps(x_is_z, y_is_z, neg)],
+        [_mm256_blendv_ps(y_is_y, x_is_y, neg), _mm256_blendv_ps(y_is_z, x_is_z, neg)],
+        [z1, z2],
+    ];
+    let pick = |v: &[__m256; 3], m: &[__m256; 2]| _mm256_blendv_ps(_mm256_blendv_ps(v[0], v[1], m[0]), v[2], m[1]);
+    let (dx, dy) = (pick(&d, &sel[0]), pick(&d, &sel[1]));
+    let s = [_mm256_div_ps(dx, dz), _mm256_div_ps(dy, dz), _mm256_div_ps(_mm256_set1_ps(1.0), dz)];
+    let o = [pick(&o, &sel[0]), pick(&o, &sel[1]), pick(&o, &sel[2])];
+    Sheared { k: [0, 1, 2], mixed: Some(sel), o, s, t_min }
 }
 
 /// A packet entry (an inner node) with at most this many of its rays still
@@ -543,8 +597,8 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, rays
     // SAFETY: the Soa row is aligned.
     let cull = unsafe { _mm256_load_ps(soa.cull.as_ptr()) };
     let mut wr: [Option<WatertightRay>; PACKET] = [None; PACKET];
-    // Made at the first leaf that enough rays reach: None when the rays do not share an axis permutation.
-    let mut sheared: Option<Option<(Sheared, __m256)>> = None;
+    // Made at the first leaf that enough rays reach, with the rays' t_max.
+    let mut sheared: Option<(Sheared, __m256)> = None;
     // Rays still looking for an occluder.
     let mut open = if n == PACKET { 0xff } else { (1u32 << n) - 1 };
     let all = open;
@@ -611,18 +665,15 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, rays
             if K::WATERTIGHT
                 && count & ENTRY_LEAF == 0
                 && m.count_ones() >= SOA_LEAF_RAYS
-                && let Some((sh, t_max)) = sheared
-                    .get_or_insert_with(|| {
-                        let r: [Ray; PACKET] = std::array::from_fn(|i| rays[i.min(n - 1)]);
-                        let t_max = _mm256_setr_ps(
-                            r[0].t_max, r[1].t_max, r[2].t_max, r[3].t_max, r[4].t_max, r[5].t_max, r[6].t_max,
-                            r[7].t_max,
-                        );
-                        shear8(&r).map(|sh| (sh, t_max))
-                    })
-                    .as_ref()
                 && let Some(pk) = &bvh.packets
             {
+                let (sh, t_max) = sheared.get_or_insert_with(|| {
+                    let r: [Ray; PACKET] = std::array::from_fn(|i| rays[i.min(n - 1)]);
+                    let t_max = _mm256_setr_ps(
+                        r[0].t_max, r[1].t_max, r[2].t_max, r[3].t_max, r[4].t_max, r[5].t_max, r[6].t_max, r[7].t_max,
+                    );
+                    (shear8(&r), t_max)
+                });
                 // One triangle against all the leaf's rays at once; a ray
                 // leaves the leaf at its first occluder (any occluder will do:
                 // the answer is a yes or no).
