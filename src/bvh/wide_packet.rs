@@ -11,9 +11,9 @@
 //! same order), so a ray enters exactly the boxes it would enter alone, and
 //! each stacked child keeps its rays' own entry distances, so a ray whose
 //! closest hit moved nearer drops the children beyond it. A leaf that most
-//! of the packet's rays reach (and whose rays share the watertight test's
-//! axis permutation) is tested one triangle against the rays at once, with
-//! the single-ray arithmetic lane for lane; other leaves are tested ray by
+//! of the packet's rays reach is tested one triangle against the rays at
+//! once, with the single-ray arithmetic lane for lane (each ray on its own
+//! axis permutation of the watertight test); other leaves are tested ray by
 //! ray with the single-ray leaf code, and an inner
 //! node that at most `SINGLE_RAYS` of the packet's rays reach is walked by
 //! each of them alone with the single-ray traversal. Each ray's answer is
