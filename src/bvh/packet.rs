@@ -41,7 +41,7 @@ const _: () = assert!(std::mem::size_of::<Tri4>() == 160);
 impl Tri4 {
     /// Vertex `j` of lane `l`.
     #[inline(always)]
-    fn vertex(&self, j: usize, l: usize) -> Vec3 {
+    pub(super) fn vertex(&self, j: usize, l: usize) -> Vec3 {
         Vec3::new(self.v[3 * j][l], self.v[3 * j + 1][l], self.v[3 * j + 2][l])
     }
 }

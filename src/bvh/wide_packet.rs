@@ -14,15 +14,12 @@
 //! of the packet's rays reach is tested one triangle against the rays at
 //! once, with the single-ray arithmetic lane for lane (each ray on its own
 //! axis permutation of the watertight test); other leaves are tested ray by
-//! ray with the single-ray leaf code, and an inner
-//! node that at most `SINGLE_RAYS` of the packet's rays reach is walked by
-//! each of them alone with the single-ray traversal. Each ray's answer is
-//! therefore the single-ray answer, bit for bit (the tests check it against
-//! brute force).
+//! ray with the single-ray leaf code, and an inner node that at most
+//! `SINGLE_RAYS` of the packet's rays reach is walked by each of them alone
+//! with the single-ray traversal. Each ray's answer is therefore the
+//! single-ray answer, bit for bit (the tests check it against brute force).
 
 use std::mem::MaybeUninit;
-
-use glam::Vec3;
 
 use crate::geometry::offset::gamma;
 use crate::geometry::triangle::{SIGN_MARGIN, TriangleKernel, WatertightRay, intersect_watertight};
@@ -445,8 +442,8 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, 
                     let i = unc.trailing_zeros() as usize;
                     unc &= unc - 1;
                     let w = wr[i].get_or_insert_with(|| WatertightRay::new(r[i].dir));
-                    let v = [0, 1, 2].map(|j| Vec3::new(p.v[3 * j][l], p.v[3 * j + 1][l], p.v[3 * j + 2][l]));
-                    if let Some((t, u, v2)) = intersect_watertight(&r[i], w, v[0], v[1], v[2]) {
+                    let (v0, v1, v2) = (p.vertex(0, l), p.vertex(1, l), p.vertex(2, l));
+                    if let Some((t, u, v2)) = intersect_watertight(&r[i], w, v0, v1, v2) {
                         closer |= Hit::offer(&mut best[i], &mut r[i], Hit { t, prim: p.id[l], u, v: v2 });
                     }
                 }
@@ -519,16 +516,18 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, 
 /// divisions, lane for lane, so the same bits).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn shear8(r: &[Ray; PACKET]) -> Sheared {
+fn shear8(rays: &[Ray]) -> Sheared {
     use std::arch::x86_64::*;
-    // Rows of eight lanes gathered in memory, then loaded once each.
+    // Rows of eight lanes gathered in memory, then loaded once each (missing
+    // lanes repeat the last ray, as everywhere in the packet).
     let (mut d, mut o, mut t_min) = ([[0.0f32; PACKET]; 3], [[0.0f32; PACKET]; 3], [0.0f32; PACKET]);
     for i in 0..PACKET {
+        let r = &rays[i.min(rays.len() - 1)];
         for a in 0..3 {
-            d[a][i] = r[i].dir[a];
-            o[a][i] = r[i].origin[a];
+            d[a][i] = r.dir[a];
+            o[a][i] = r.origin[a];
         }
-        t_min[i] = r[i].t_min;
+        t_min[i] = r.t_min;
     }
     // SAFETY: each row holds 8 floats; loadu has no alignment requirement.
     let ld = |row: &[f32; PACKET]| unsafe { _mm256_loadu_ps(row.as_ptr()) };
@@ -668,11 +667,9 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, rays
                 && let Some(pk) = &bvh.packets
             {
                 let (sh, t_max) = sheared.get_or_insert_with(|| {
-                    let r: [Ray; PACKET] = std::array::from_fn(|i| rays[i.min(n - 1)]);
-                    let t_max = _mm256_setr_ps(
-                        r[0].t_max, r[1].t_max, r[2].t_max, r[3].t_max, r[4].t_max, r[5].t_max, r[6].t_max, r[7].t_max,
-                    );
-                    (shear8(&r), t_max)
+                    let t_max: [f32; PACKET] = std::array::from_fn(|i| rays[i.min(n - 1)].t_max);
+                    // SAFETY: t_max holds 8 floats; loadu has no alignment requirement.
+                    (shear8(rays), unsafe { _mm256_loadu_ps(t_max.as_ptr()) })
                 });
                 // One triangle against all the leaf's rays at once; a ray
                 // leaves the leaf at its first occluder (any occluder will do:
@@ -682,14 +679,13 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, rays
                     let pl = k % super::packet::PW;
                     // SAFETY: any8 runs on AVX2 CPUs only.
                     let (ok, unc, _, _, _) = unsafe { tri_x8(sh, p, pl, *t_max) };
-                    let mut hit = ok & m;
-                    let mut unc = unc & m & !hit;
+                    let (mut hit, mut unc) = (ok & m, unc & m);
                     while unc != 0 {
                         let i = unc.trailing_zeros() as usize;
                         unc &= unc - 1;
                         let w = wr[i].get_or_insert_with(|| WatertightRay::new(rays[i].dir));
-                        let v = [0, 1, 2].map(|j| Vec3::new(p.v[3 * j][pl], p.v[3 * j + 1][pl], p.v[3 * j + 2][pl]));
-                        if intersect_watertight(&rays[i], w, v[0], v[1], v[2]).is_some() {
+                        let (v0, v1, v2) = (p.vertex(0, pl), p.vertex(1, pl), p.vertex(2, pl));
+                        if intersect_watertight(&rays[i], w, v0, v1, v2).is_some() {
                             hit |= 1 << i;
                         }
                     }
