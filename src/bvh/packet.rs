@@ -238,7 +238,6 @@ fn tri4_sse(p: &Tri4, ray: &Ray, wr: &WatertightRay) -> (u32, u32, [f32; PW], [f
         let e0 = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
         let e1 = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
         let e2 = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
-        let z = _mm_setzero_ps();
         let az = _mm_mul_ps(sz, a_z);
         let bz = _mm_mul_ps(sz, b_z);
         let cz = _mm_mul_ps(sz, c_z);
@@ -258,19 +257,25 @@ fn tri4_sse(p: &Tri4, ray: &Ray, wr: &WatertightRay) -> (u32, u32, [f32; PW], [f
                 _mm_mul_ps(delta_x, max_yt),
             ),
         );
-        // Lanes with an edge function within SIGN_MARGIN bounds of 0: uncertain sign.
+        // Lanes with an edge function within SIGN_MARGIN bounds of 0 (or a
+        // NaN bound or minimum): uncertain sign, decided by the scalar routine.
         let min_e = _mm_min_ps(_mm_min_ps(abs(e0), abs(e1)), abs(e2));
-        let uncertain = _mm_cmple_ps(min_e, _mm_mul_ps(_mm_set1_ps(SIGN_MARGIN), delta_e));
-        let neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(e0, z), _mm_cmplt_ps(e1, z)), _mm_cmplt_ps(e2, z));
-        let pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(e0, z), _mm_cmpgt_ps(e1, z)), _mm_cmpgt_ps(e2, z));
+        let uncertain = _mm_cmpngt_ps(min_e, _mm_mul_ps(_mm_set1_ps(SIGN_MARGIN), delta_e));
+        // In the other lanes, if no edge function is NaN, `min_e` is their
+        // least magnitude and exceeds a bound >= 0, so all are nonzero and
+        // "some negative and some positive" is "the sign bits differ"; a NaN
+        // one (which `_mm_min_ps` may pass over) makes det and t NaN, which
+        // no range admits, as in the scalar routine. Only the sign bit of
+        // `mixed` is meaningful.
+        let mixed = _mm_or_ps(_mm_xor_ps(e0, e1), _mm_xor_ps(e0, e2));
         let det = _mm_add_ps(_mm_add_ps(e0, e1), e2);
         let t_scaled = _mm_add_ps(_mm_add_ps(_mm_mul_ps(e0, az), _mm_mul_ps(e1, bz)), _mm_mul_ps(e2, cz));
         let inv_det = _mm_div_ps(_mm_set1_ps(1.0), det);
         let t = _mm_mul_ps(t_scaled, inv_det);
         // Ordered comparisons: a NaN t fails both, as `!(t >= t_min && t <= t_max)` rejects it.
         let in_range = _mm_and_ps(_mm_cmpge_ps(t, _mm_set1_ps(ray.t_min)), _mm_cmple_ps(t, _mm_set1_ps(ray.t_max)));
-        let reject = _mm_or_ps(_mm_and_ps(neg, pos), uncertain);
-        let ok = _mm_andnot_ps(reject, in_range);
+        // Sign bits only from here on (movemask reads nothing else).
+        let ok = _mm_andnot_ps(_mm_or_ps(mixed, uncertain), in_range);
         let zero_mask = _mm_movemask_ps(uncertain) as u32;
         if _mm_movemask_ps(ok) == 0 {
             // Most packets are missed: skip the t error bound and the stores.

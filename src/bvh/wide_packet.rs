@@ -263,7 +263,6 @@ unsafe fn tri_x8(
         let e0 = _mm256_sub_ps(_mm256_mul_ps(cx, by), _mm256_mul_ps(cy, bx));
         let e1 = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));
         let e2 = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
-        let z = _mm256_setzero_ps();
         let az = _mm256_mul_ps(sz, a_z);
         let bz = _mm256_mul_ps(sz, b_z);
         let cz = _mm256_mul_ps(sz, c_z);
@@ -283,15 +282,13 @@ unsafe fn tri_x8(
             ),
         );
         let min_e = _mm256_min_ps(_mm256_min_ps(abs(e0), abs(e1)), abs(e2));
-        let uncertain = _mm256_cmp_ps::<_CMP_LE_OS>(min_e, _mm256_mul_ps(_mm256_set1_ps(SIGN_MARGIN), delta_e));
-        let neg = _mm256_or_ps(
-            _mm256_or_ps(_mm256_cmp_ps::<_CMP_LT_OS>(e0, z), _mm256_cmp_ps::<_CMP_LT_OS>(e1, z)),
-            _mm256_cmp_ps::<_CMP_LT_OS>(e2, z),
-        );
-        let pos = _mm256_or_ps(
-            _mm256_or_ps(_mm256_cmp_ps::<_CMP_GT_OS>(e0, z), _mm256_cmp_ps::<_CMP_GT_OS>(e1, z)),
-            _mm256_cmp_ps::<_CMP_GT_OS>(e2, z),
-        );
+        // Uncertain: an edge function within SIGN_MARGIN bounds of 0, or a
+        // NaN bound or minimum (unordered compares true).
+        let uncertain = _mm256_cmp_ps::<_CMP_NGT_US>(min_e, _mm256_mul_ps(_mm256_set1_ps(SIGN_MARGIN), delta_e));
+        // Elsewhere, with no NaN edge function, all are nonzero: "some
+        // negative and some positive" is "the sign bits differ"; a NaN one
+        // makes t NaN, never in range (see `packet::tri4_sse`).
+        let mixed = _mm256_or_ps(_mm256_xor_ps(e0, e1), _mm256_xor_ps(e0, e2));
         let det = _mm256_add_ps(_mm256_add_ps(e0, e1), e2);
         let t_scaled =
             _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(e0, az), _mm256_mul_ps(e1, bz)), _mm256_mul_ps(e2, cz));
@@ -299,8 +296,8 @@ unsafe fn tri_x8(
         let t = _mm256_mul_ps(t_scaled, inv_det);
         // Ordered comparisons: a NaN t fails both, as `!(t >= t_min && t <= t_max)` rejects it.
         let in_range = _mm256_and_ps(_mm256_cmp_ps::<_CMP_GE_OS>(t, sh.t_min), _mm256_cmp_ps::<_CMP_LE_OS>(t, t_max));
-        let reject = _mm256_or_ps(_mm256_and_ps(neg, pos), uncertain);
-        let ok = _mm256_andnot_ps(reject, in_range);
+        // Sign bits only from here on (movemask reads nothing else).
+        let ok = _mm256_andnot_ps(_mm256_or_ps(mixed, uncertain), in_range);
         let zero_mask = _mm256_movemask_ps(uncertain) as u32;
         if _mm256_movemask_ps(ok) == 0 {
             return (0, zero_mask, [0.0; PACKET], [0.0; PACKET], [0.0; PACKET]);
