@@ -6,7 +6,7 @@
 
 use glam::Vec3;
 
-use super::offset::{SpawnOffset, gamma, spawn_origin, triangle_point_error};
+use super::offset::{SideOrigins, SpawnOffset, gamma, spawn_origin, triangle_point_error};
 use super::{Hit, Ray, Sphere, Triangle};
 
 /// A point on a surface with what is needed to leave it robustly.
@@ -45,6 +45,41 @@ impl SurfaceInteraction {
     pub fn spawn_ray_to(&self, policy: SpawnOffset, target: Vec3, t_max: f32) -> Ray {
         let o = self.spawn_origin(policy, target - self.p);
         Ray::with_range(o, target - o, 0.0, t_max)
+    }
+}
+
+/// Rays leaving one surface point towards many targets (the shadow rays of
+/// an area light's samples): [`SurfaceInteraction::spawn_ray_to`] with the
+/// robust origin's work done once per side ([`SideOrigins`]), the same rays
+/// bit for bit.
+#[derive(Clone, Copy, Debug)]
+pub struct Spawner {
+    /// The point.
+    p: Vec3,
+    /// The policy.
+    policy: SpawnOffset,
+    /// Both robust origins (unused under a fixed offset).
+    sides: SideOrigins,
+}
+
+impl Spawner {
+    /// `si.spawn_ray_to(policy, target, t_max)`.
+    #[inline]
+    pub fn ray_to(&self, target: Vec3, t_max: f32) -> Ray {
+        let w = target - self.p;
+        let o = match self.policy {
+            SpawnOffset::Robust => self.sides.origin(w),
+            SpawnOffset::Fixed { .. } => spawn_origin(self.policy, self.p, Vec3::ZERO, Vec3::ZERO, w),
+        };
+        Ray::with_range(o, target - o, 0.0, t_max)
+    }
+}
+
+impl SurfaceInteraction {
+    /// A [`Spawner`] for rays leaving this point under `policy`.
+    #[inline]
+    pub fn spawner(&self, policy: SpawnOffset) -> Spawner {
+        Spawner { p: self.p, policy, sides: SideOrigins::new(self.p, self.p_err, self.ng) }
     }
 }
 
@@ -101,4 +136,40 @@ impl Sphere {
 #[inline]
 pub fn sphere_point_error(q: Vec3, c: Vec3) -> Vec3 {
     gamma(6) * q.abs() + gamma(5) * c.abs()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The spawner's rays are `spawn_ray_to`'s, bit for bit, on both sides
+    /// of triangles and spheres (far from the origin too), under both policies.
+    #[test]
+    fn spawner_rays_are_spawn_ray_to() {
+        let tri = Triangle {
+            v: [Vec3::new(1.0e3, 2.0, -3.0), Vec3::new(1.0e3 + 1.0, 2.5, -3.0), Vec3::new(1.0e3, 2.0, -2.0)],
+        };
+        let sphere = Sphere { center: Vec3::new(-4.0, 20.0, 1.0e2), radius: 20.0 };
+        let si_tri = tri.interaction(&Hit { t: 47.8, prim: 0, u: 0.2, v: 0.3 });
+        let rs = Ray::new(Vec3::new(-4.0, 60.0, 1.0e2 + 0.5), Vec3::new(0.0, -1.0, 0.0));
+        let si_sphere = sphere.interaction(&rs, &Hit { t: 20.0, prim: 1, u: 0.0, v: 0.0 });
+        let targets = [
+            Vec3::new(0.0, 100.0, 0.0),
+            Vec3::new(0.0, -100.0, 0.0),
+            Vec3::new(1.0e3 + 5.0, 2.0, -3.0),
+            Vec3::new(-1.0e4, 3.0, 7.0),
+        ];
+        for si in [si_tri, si_sphere] {
+            for policy in [SpawnOffset::Robust, SpawnOffset::Fixed { epsilon: 1e-3 }] {
+                let sp = si.spawner(policy);
+                for t in targets {
+                    let (a, b) = (sp.ray_to(t, 0.999), si.spawn_ray_to(policy, t, 0.999));
+                    let bits = |r: &Ray| {
+                        (r.origin.to_array().map(f32::to_bits), r.dir.to_array().map(f32::to_bits), r.t_min, r.t_max)
+                    };
+                    assert_eq!(bits(&a), bits(&b), "{policy:?} towards {t}");
+                }
+            }
+        }
+    }
 }

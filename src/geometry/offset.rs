@@ -70,10 +70,14 @@ pub fn next_down(v: f32) -> f32 {
 /// on the side of the geometric normal `n` that `w` points to.
 #[inline]
 pub fn offset_origin(p: Vec3, p_err: Vec3, n: Vec3, w: Vec3) -> Vec3 {
-    let mut n = n.normalize_or_zero();
-    if w.dot(n) < 0.0 {
-        n = -n;
-    }
+    let n = n.normalize_or_zero();
+    offset_along(p, p_err, if w.dot(n) < 0.0 { -n } else { n })
+}
+
+/// `p` moved off the surface along the unit normal `n` (already turned to
+/// the side the ray leaves on): [`offset_origin`]'s arithmetic.
+#[inline]
+fn offset_along(p: Vec3, p_err: Vec3, n: Vec3) -> Vec3 {
     // pbrt-v4's offset: the error bound projected on the normal (the bound is
     // floored at the vertex scale, see `triangle_point_error`, so it never vanishes).
     let d = n.abs().dot(p_err);
@@ -90,6 +94,35 @@ pub fn offset_origin(p: Vec3, p_err: Vec3, n: Vec3, w: Vec3) -> Vec3 {
         }
     }
     po
+}
+
+/// The two origins [`offset_origin`] can give for one surface point, made
+/// once: a point that sends many rays (the shadow rays towards an area
+/// light's samples) picks one by the side each ray leaves on, with the same
+/// bits as [`offset_origin`] computes ray by ray.
+#[derive(Clone, Copy, Debug)]
+pub struct SideOrigins {
+    /// The unit geometric normal (zero for a degenerate one).
+    n: Vec3,
+    /// The origin for rays leaving on the normal's side.
+    front: Vec3,
+    /// The origin for rays leaving on the other side.
+    back: Vec3,
+}
+
+impl SideOrigins {
+    /// Both origins of point `p` (error bound `p_err`, geometric normal `n`).
+    #[inline]
+    pub fn new(p: Vec3, p_err: Vec3, n: Vec3) -> Self {
+        let n = n.normalize_or_zero();
+        Self { n, front: offset_along(p, p_err, n), back: offset_along(p, p_err, -n) }
+    }
+
+    /// `offset_origin(p, p_err, n, w)`.
+    #[inline]
+    pub fn origin(&self, w: Vec3) -> Vec3 {
+        if w.dot(self.n) < 0.0 { self.back } else { self.front }
+    }
 }
 
 /// Origin for a ray leaving `p` in direction `w` under the chosen policy.
@@ -112,6 +145,33 @@ mod tests {
         assert!(next_up(0.0) > 0.0);
         assert!(next_down(0.0) < 0.0);
         assert_eq!(next_up(-1.0), -1.0 + f32::EPSILON / 2.0);
+    }
+
+    #[test]
+    fn side_origins_are_the_per_ray_origins() {
+        // Directions on both sides, in the plane (w.n = 0), a NaN one, with
+        // normals of any length (including a degenerate one).
+        let ws = [
+            Vec3::new(0.3, 1.0, -0.2),
+            Vec3::new(0.3, -1.0, -0.2),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(-2.0, 1e-30, 5.0),
+            Vec3::new(f32::NAN, 1.0, 0.0),
+        ];
+        let cases = [
+            (Vec3::new(1.0e4, 2.0, -3.0), Vec3::new(0.1, 3.0, 0.2)),
+            (Vec3::new(0.5, 0.0, 0.25), Vec3::Y),
+            (Vec3::new(-7.0, 1e-20, 3.5), Vec3::new(-1e-3, 2e-3, 5.0)),
+            (Vec3::new(1.0, 2.0, 3.0), Vec3::ZERO),
+        ];
+        for (p, n) in cases {
+            let e = triangle_point_error([0.2, 0.3, 0.5], [p, p * 0.5, p + Vec3::ONE]);
+            let s = SideOrigins::new(p, e, n);
+            for w in ws {
+                let (a, b) = (s.origin(w), offset_origin(p, e, n, w));
+                assert_eq!(a.to_array().map(f32::to_bits), b.to_array().map(f32::to_bits), "p {p} n {n} w {w}");
+            }
+        }
     }
 
     #[test]

@@ -165,8 +165,10 @@ impl<'a> Whitted<'a> {
         if n == 0 {
             return;
         }
+        // One origin computation per side of the surface, not per ray.
+        let spawner = it.si.spawner(self.offset);
         for k in 0..n {
-            batch.rays[k] = it.si.spawn_ray_to(self.offset, batch.targets[k], SHADOW_T_MAX);
+            batch.rays[k] = spawner.ray_to(batch.targets[k], SHADOW_T_MAX);
         }
         c.shadow_rays += n as u64;
         self.tracer.occluded_batch(&batch.rays[..n], &mut batch.occluded[..n]);
