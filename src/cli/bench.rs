@@ -263,7 +263,8 @@ pub fn print_mesh_race(m: &MeshRace, rounds: usize) {
 /// Print the whole-render races.
 pub fn print_render_race(r: &[SceneRace], rounds: usize) {
     println!(
-        "\n## Whole renders, --tracer native against --tracer embree (build + render; wall clock), {rounds} interleaved rounds"
+        "\n## Whole renders, --tracer native against --tracer embree (build + render; wall clock), {rounds} interleaved rounds (short renders more, up to {}: column `wins` counts them)",
+        rounds * crate::perf::render_race::MAX_ROUND_FACTOR
     );
     println!(
         "{:<36} {:>9} {:>3} {:>10} {:>10} {:>7} {:>7} {:>7} {:>7}  images (96x96, 1 spp)",

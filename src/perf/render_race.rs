@@ -36,7 +36,7 @@ pub struct SceneRace {
 /// What to race.
 #[derive(Clone, Debug, Serialize)]
 pub struct RenderRaceOptions {
-    /// Interleaved rounds.
+    /// Interleaved rounds (at least; short renders get more, see [`rounds_for`]).
     pub rounds: usize,
     /// Thread counts.
     pub threads: Vec<usize>,
@@ -79,6 +79,24 @@ fn timed_render(scene: &Scene, cfg: &AccelConfig, threads: usize) -> Result<f64>
     Ok(start.elapsed().as_secs_f64())
 }
 
+/// Seconds of renders per tracer that a short scene's race takes at least
+/// (more rounds, up to [`MAX_ROUND_FACTOR`] times those asked for).
+const MIN_RACE_SECONDS: f64 = 0.5;
+
+/// The most rounds a short scene gets, as a multiple of the rounds asked for.
+pub const MAX_ROUND_FACTOR: usize = 8;
+
+/// Rounds for a scene whose slower warm-up render took `warm` seconds: at
+/// least `rounds`, and more for short renders, whose times on a shared
+/// machine swing with the other tenants' load (a 12 ms render on 2 threads
+/// measured 8 to 15 ms from round to round, so 7 rounds gave medians 0.92 to
+/// 1.2 from one run to the next); interleaving keeps each round's pair under
+/// the same load.
+pub fn rounds_for(rounds: usize, warm: f64) -> usize {
+    let wanted = if warm > 0.0 { (MIN_RACE_SECONDS / warm).ceil() as usize } else { usize::MAX };
+    wanted.clamp(rounds, rounds * MAX_ROUND_FACTOR)
+}
+
 /// Race native against Embree on `scene_path`.
 pub fn race_scene(scene_path: &Path, opts: &RenderRaceOptions) -> Result<SceneRace> {
     let ov = Overrides { width: Some(opts.size), height: Some(opts.size), ..Default::default() };
@@ -89,9 +107,8 @@ pub fn race_scene(scene_path: &Path, opts: &RenderRaceOptions) -> Result<SceneRa
     for &threads in &opts.threads {
         let mut c = Contest { name: name.clone(), opponent: "embree".into(), threads, rays: 0, times: Vec::new() };
         // One untimed render each first: page in the scene's textures and meshes for both.
-        timed_render(&scene, &native, threads)?;
-        timed_render(&scene, &embree, threads)?;
-        for round in 0..opts.rounds {
+        let warm = timed_render(&scene, &native, threads)?.max(timed_render(&scene, &embree, threads)?);
+        for round in 0..rounds_for(opts.rounds, warm) {
             let (a, b) = if round % 2 == 0 {
                 let a = timed_render(&scene, &native, threads)?;
                 (a, timed_render(&scene, &embree, threads)?)
@@ -111,4 +128,21 @@ pub fn race_scene(scene_path: &Path, opts: &RenderRaceOptions) -> Result<SceneRa
     let (ia, ib) = (render(&check, ta.as_ref(), &quiet)?, render(&check, tb.as_ref(), &quiet)?);
     let agreement = agreement(&check, &ia.image, ta.as_ref(), &ib.image, tb.as_ref());
     Ok(SceneRace { scene: scene_path.to_path_buf(), size: (scene.width, scene.height), contests, agreement })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn short_renders_get_more_rounds() {
+        // Long renders keep the rounds asked for.
+        assert_eq!(rounds_for(7, 1.0), 7);
+        assert_eq!(rounds_for(7, 0.2), 7);
+        // 12 ms renders: 0.5 s / 12 ms = 42 rounds.
+        assert_eq!(rounds_for(7, 0.012), 42);
+        // Capped at 8 times the rounds asked for.
+        assert_eq!(rounds_for(7, 0.001), 56);
+        assert_eq!(rounds_for(3, 0.0), 24);
+    }
 }
