@@ -255,19 +255,17 @@ fn build_node(
     let right_first = first + mid as u32;
     // On a one-thread pool the fork would only add copies of the subtrees.
     if n >= PARALLEL_THRESHOLD && rayon::current_num_threads() > 1 {
-        let (lv, rv) = rayon::join(
-            || {
-                let mut v = Vec::with_capacity(2 * l.len());
-                build_node(s, input, l, lb, lc, first, depth + 1, &mut v);
-                v
-            },
+        // The left subtree goes straight into `out` (right after this node,
+        // as in the sequential order); only the right one is built apart and
+        // copied after it.
+        let ((), rv) = rayon::join(
+            || build_node(s, input, l, lb, lc, first, depth + 1, out),
             || {
                 let mut v = Vec::with_capacity(2 * r.len());
                 build_node(s, input, r, rb, rc, right_first, depth + 1, &mut v);
                 v
             },
         );
-        append_shifted(out, &lv);
         let right = out.len() as u32;
         append_shifted(out, &rv);
         out[me] = Node::interior(bounds, right);
