@@ -546,7 +546,7 @@ impl WideBvh {
         let nodes = super::collapse::collapse(&bvh.nodes);
         let e = &bvh.prims.entries;
         let num_triangles = bvh.prims.num_triangles;
-        Self::assemble(nodes, num_triangles, bvh.prims.spheres.clone(), e.len(), |k| e[k].id, |k| e[k].v)
+        Self::assemble(nodes, num_triangles, bvh.prims.spheres.clone(), e.len(), |k| e[k].id, |k| e[k].v, |_| {})
     }
 
     /// [`Self::from_binary`] for a tree whose primitives are not gathered yet:
@@ -561,11 +561,20 @@ impl WideBvh {
                 crate::geometry::Prim::Sphere(s) => [s.center, Vec3::new(s.radius, 0.0, 0.0), Vec3::ZERO],
             }
         };
-        Self::assemble(nodes, nt, prims.spheres.clone(), tree.order.len(), |k| tree.order[k], vertices)
+        // The leaf order visits the triangles in no order the hardware
+        // prefetcher can follow: each node's are requested before they are
+        // packed (one or two cache lines each).
+        let touch = |k: usize| {
+            if let Some(t) = prims.triangles.get(tree.order[k] as usize) {
+                prefetch_span(std::ptr::from_ref(t).cast(), std::mem::size_of_val(t));
+            }
+        };
+        Self::assemble(nodes, nt, prims.spheres.clone(), tree.order.len(), |k| tree.order[k], vertices, touch)
     }
 
     /// Point every leaf lane at its packets, or at its entries when it holds a sphere.
-    /// `id(k)` and `v(k)` give leaf slot `k`'s primitive id and data (a [`crate::bvh::prims::LeafEntry`]'s `v`).
+    /// `id(k)` and `v(k)` give leaf slot `k`'s primitive id and data (a [`crate::bvh::prims::LeafEntry`]'s `v`);
+    /// `touch(k)` may prefetch what `v(k)` reads (it is called for a node's slots before they are read).
     fn assemble(
         mut nodes: Vec<WideNode>,
         num_triangles: u32,
@@ -573,6 +582,7 @@ impl WideBvh {
         slots: usize,
         id: impl Fn(usize) -> u32 + Sync,
         v: impl Fn(usize) -> [Vec3; 3] + Sync,
+        touch: impl Fn(usize) + Sync,
     ) -> Self {
         let all_triangles = num_triangles as usize == slots;
         let only_triangles =
@@ -595,11 +605,17 @@ impl WideBvh {
         let mut entries = Vec::with_capacity(nent);
         let tri = |k: usize| (v(k), id(k));
         if all_triangles && rayon::current_num_threads() > 1 && npk >= 1 << 14 {
-            pack_parallel(&mut nodes, &mut packets.packets, npk, &tri);
+            pack_parallel(&mut nodes, &mut packets.packets, npk, &tri, &touch);
             let prims = LeafPrims { entries, num_triangles, spheres };
             return Self { levels: levels(&nodes), nodes, prims, packets: Some(packets), isa: detect_isa() };
         }
         for node in &mut nodes {
+            for l in 0..WIDTH {
+                let (first, count) = (node.child[l], node.count[l]);
+                for k in first..first + count {
+                    touch(k as usize);
+                }
+            }
             for l in 0..WIDTH {
                 let (first, count) = (node.child[l], node.count[l]);
                 if count == 0 {
@@ -921,14 +937,34 @@ unsafe fn one_by_one_any<K: TriangleKernel>(bvh: &WideBvh, rays: &[Ray], out: &m
     }
 }
 
+/// Ask the CPU to bring the cache lines of the `len` bytes at `p` into the
+/// cache (a hint: no memory is read, so any address is allowed).
+#[inline(always)]
+fn prefetch_span(p: *const u8, len: usize) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        // SAFETY: prefetching is a hint that never faults, whatever the address.
+        unsafe {
+            _mm_prefetch::<_MM_HINT_T0>(p.cast());
+            _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(len.saturating_sub(1)).cast());
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (p, len);
+}
+
 /// The triangle packets of every leaf lane of `nodes`, written in parallel
 /// into `packets` (empty, with room for `npk`) in the order of the sequential
-/// pass (node by node, lane by lane), and each lane pointed at its first packet.
+/// pass (node by node, lane by lane), and each lane pointed at its first
+/// packet; `touch(k)` is called for every leaf slot of a node before the
+/// node's packets are made (a prefetch).
 fn pack_parallel(
     nodes: &mut [WideNode],
     packets: &mut Vec<super::packet::Tri4>,
     npk: usize,
     tri: &(impl Fn(usize) -> ([Vec3; 3], u32) + Sync),
+    touch: &(impl Fn(usize) + Sync),
 ) {
     use rayon::prelude::*;
     assert!(packets.is_empty() && packets.capacity() >= npk);
@@ -944,6 +980,12 @@ fn pack_parallel(
         rest = tail;
     }
     nodes.par_iter_mut().zip(chunks).with_min_len(256).for_each(|(node, (mut at, dst))| {
+        for l in 0..WIDTH {
+            let (first, count) = (node.child[l], node.count[l]);
+            for k in first..first + count {
+                touch(k as usize);
+            }
+        }
         let mut w = 0;
         for l in 0..WIDTH {
             let (first, count) = (node.child[l], node.count[l]);
