@@ -144,6 +144,22 @@ pub fn centroid_bounds_of(refs: &[PrimRef]) -> BoxA {
     refs.iter().fold(BoxA::EMPTY, |b, r| b.grow(r.centroid()))
 }
 
+/// The box around `refs` and the box around their centroids, in one pass
+/// (in parallel chunks for large inputs: boxes unite exactly in any order,
+/// so the result is that of a sequential pass).
+pub fn root_bounds(refs: &[PrimRef]) -> (BoxA, BoxA) {
+    let one = |c: &[PrimRef]| {
+        c.iter().fold((BoxA::EMPTY, BoxA::EMPTY), |(b, cb), r| (b.union(r.boxa()), cb.grow(r.centroid())))
+    };
+    if refs.len() >= PARALLEL_THRESHOLD && rayon::current_num_threads() > 1 {
+        refs.par_chunks(PARALLEL_THRESHOLD)
+            .map(one)
+            .reduce(|| (BoxA::EMPTY, BoxA::EMPTY), |(a, ca), (b, cb)| (a.union(b), ca.union(cb)))
+    } else {
+        one(refs)
+    }
+}
+
 /// A split strategy: the only part that differs between builders.
 pub trait Splitter: Sync {
     /// Deepest level a node may have (the root is level 0); nodes there become leaves.
@@ -213,10 +229,15 @@ pub fn build_tree(prims: &Primitives, splitter: &dyn Splitter) -> BuiltTree {
     let mut refs = prim_refs(prims);
     let mut nodes = Vec::with_capacity(2 * prims.len().max(1));
     if !refs.is_empty() {
-        let root = bounds_of(&refs);
-        build_node(splitter, &input, &mut refs, root, None, 0, 0, &mut nodes);
+        let (root, centroids) = root_bounds(&refs);
+        build_node(splitter, &input, &mut refs, root.aabb(), Some(centroids), 0, 0, &mut nodes);
     }
-    BuiltTree { nodes, order: refs.iter().map(PrimRef::id).collect() }
+    let order = if refs.len() >= PARALLEL_THRESHOLD && rayon::current_num_threads() > 1 {
+        refs.par_iter().with_min_len(PARALLEL_THRESHOLD).map(PrimRef::id).collect()
+    } else {
+        refs.iter().map(PrimRef::id).collect()
+    };
+    BuiltTree { nodes, order }
 }
 
 /// Run `splitter` over `prims`, flatten the result and gather the primitives in leaf order.
