@@ -53,7 +53,8 @@ pub struct BenchArgs {
     pub threads: Vec<usize>,
     /// With `--race`: also race whole renders, `--tracer native` against
     /// `--tracer embree`, on every scene in this folder (default scenes/),
-    /// and check that their images agree.
+    /// and check that their images agree. Scenes with short renders get
+    /// more rounds (at least 0.5 s of renders per tracer, up to 8x `ROUNDS`).
     #[arg(long, value_name = "DIR", num_args = 0..=1, default_missing_value = "scenes")]
     pub renders: Option<PathBuf>,
     /// Width and height of the raced renders (16 to 4096).
