@@ -58,8 +58,9 @@ pub struct Spawner {
     p: Vec3,
     /// The policy.
     policy: SpawnOffset,
-    /// Both robust origins (unused under a fixed offset).
-    sides: SideOrigins,
+    /// Both robust origins (`None` under a fixed offset, which depends on
+    /// each ray's direction and needs neither).
+    sides: Option<SideOrigins>,
 }
 
 impl Spawner {
@@ -67,9 +68,10 @@ impl Spawner {
     #[inline]
     pub fn ray_to(&self, target: Vec3, t_max: f32) -> Ray {
         let w = target - self.p;
-        let o = match self.policy {
-            SpawnOffset::Robust => self.sides.origin(w),
-            SpawnOffset::Fixed { .. } => spawn_origin(self.policy, self.p, Vec3::ZERO, Vec3::ZERO, w),
+        let o = match &self.sides {
+            Some(sides) => sides.origin(w),
+            // The fixed offset reads neither the error bound nor the normal.
+            None => spawn_origin(self.policy, self.p, Vec3::ZERO, Vec3::ZERO, w),
         };
         Ray::with_range(o, target - o, 0.0, t_max)
     }
@@ -79,7 +81,8 @@ impl SurfaceInteraction {
     /// A [`Spawner`] for rays leaving this point under `policy`.
     #[inline]
     pub fn spawner(&self, policy: SpawnOffset) -> Spawner {
-        Spawner { p: self.p, policy, sides: SideOrigins::new(self.p, self.p_err, self.ng) }
+        let sides = matches!(policy, SpawnOffset::Robust).then(|| SideOrigins::new(self.p, self.p_err, self.ng));
+        Spawner { p: self.p, policy, sides }
     }
 }
 
