@@ -610,12 +610,7 @@ impl WideBvh {
             return Self { levels: levels(&nodes), nodes, prims, packets: Some(packets), isa: detect_isa() };
         }
         for node in &mut nodes {
-            for l in 0..WIDTH {
-                let (first, count) = (node.child[l], node.count[l]);
-                for k in first..first + count {
-                    touch(k as usize);
-                }
-            }
+            touch_leaves(node, &touch);
             for l in 0..WIDTH {
                 let (first, count) = (node.child[l], node.count[l]);
                 if count == 0 {
@@ -954,6 +949,17 @@ fn prefetch_span(p: *const u8, len: usize) {
     let _ = (p, len);
 }
 
+/// `touch(k)` for every leaf slot `k` of `node` (inner lanes have none).
+#[inline(always)]
+fn touch_leaves(node: &WideNode, touch: &impl Fn(usize)) {
+    for l in 0..WIDTH {
+        let (first, count) = (node.child[l], node.count[l]);
+        for k in first..first + count {
+            touch(k as usize);
+        }
+    }
+}
+
 /// The triangle packets of every leaf lane of `nodes`, written in parallel
 /// into `packets` (empty, with room for `npk`) in the order of the sequential
 /// pass (node by node, lane by lane), and each lane pointed at its first
@@ -980,12 +986,7 @@ fn pack_parallel(
         rest = tail;
     }
     nodes.par_iter_mut().zip(chunks).with_min_len(256).for_each(|(node, (mut at, dst))| {
-        for l in 0..WIDTH {
-            let (first, count) = (node.child[l], node.count[l]);
-            for k in first..first + count {
-                touch(k as usize);
-            }
-        }
+        touch_leaves(node, touch);
         let mut w = 0;
         for l in 0..WIDTH {
             let (first, count) = (node.child[l], node.count[l]);
