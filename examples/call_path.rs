@@ -4,9 +4,9 @@
 //! traced by `trace_all` (never inlined), so `valgrind --tool=callgrind
 //! --toggle-collect=call_path::trace_all` counts only the tracing.
 //!
-//! `cargo run --release [--features embree] --example call_path -- MESH SET N TRACER`
+//! `cargo run --release [--features embree] --example call_path -- MESH SET N TRACER [REPEAT]`
 //! with SET one of `primary`, `incoherent`, `shadow`, `batch-primary`, `batch-shadow`
-//! (N rays), or `build` (N builds, counted by `--toggle-collect=call_path::build_all`), and TRACER one of `native`, `embree`, `embree-default` (MEDIUM quality).
+//! (N rays, traced REPEAT times when a fifth argument is given), or `build` (N builds, counted by `--toggle-collect=call_path::build_all`), and TRACER one of `native`, `embree`, `embree-default` (MEDIUM quality).
 
 use std::path::Path;
 
@@ -87,7 +87,11 @@ fn main() -> rtdiff::Result<()> {
     let start = (base.len().saturating_sub(n)) / 2;
     let rays: Vec<Ray> = base[start..].iter().take(n).copied().collect();
     let tracer = build_tracer(prims, &cfg)?;
-    let hits = trace_all(tracer.as_ref(), &rays, any, batch);
+    let repeat: usize = args.get(4).and_then(|s| s.parse().ok()).unwrap_or(1);
+    let mut hits = 0;
+    for _ in 0..repeat.max(1) {
+        hits = trace_all(tracer.as_ref(), &rays, any, batch);
+    }
     println!("{mesh} {set} {}: {} rays, {hits} hit", tracer.name(), rays.len());
     Ok(())
 }

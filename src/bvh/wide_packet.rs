@@ -404,6 +404,13 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, 
                 k += 1;
             }
             if k > 0 {
+                if bvh.prefetch_all {
+                    let mut lanes = 0u32;
+                    for &(_, l) in &hit[..k] {
+                        lanes |= 1 << l;
+                    }
+                    bvh.prefetch_children(node, lanes);
+                }
                 for &(_, l) in hit[1..k].iter().rev() {
                     let l = l as usize;
                     stack[sp] = MaybeUninit::new(Entry { near: near[l], child: node.child[l], count: node.count[l] });
@@ -655,6 +662,10 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, rays
                 }
                 inner[ni] = (node.child[l], m, t);
                 ni += 1;
+                if bvh.prefetch_all {
+                    // Searched after this node's leaves.
+                    bvh.prefetch_children(node, 1 << l);
+                }
                 continue;
             }
             let c = count & !ENTRY_LEAF;
