@@ -236,58 +236,21 @@ fn bin_into2(
     boxes.iter_mut().zip(boxes2.iter()).for_each(|(x, y)| *x = x.union(*y));
 }
 
-/// Nodes with at least this many primitives are partitioned by
-/// [`partition_branchless`], smaller ones by [`partition_hoare`]. Measured
-/// (`examples/call_path.rs MESH build N`, one thread, interleaved runs): the
-/// branchless pass for every node builds dragon_87k about 15% faster but
-/// suzanne (968 triangles, spatially ordered faces) about 15% slower; from
-/// 1024 primitives up, dragon_87k gains about 6% and suzanne is unchanged.
-const BRANCHLESS_PARTITION: usize = 1024;
-
-/// In-place partition of `idx` by `side(centroid)` (1: left), Hoare's way:
-/// scan from both ends and swap the misplaced pairs, gathering each side's
-/// centroid box. Touches each reference once and writes only the swapped
-/// ones. Returns the left count and the two centroid boxes.
-#[inline(always)]
-fn partition_hoare(idx: &mut [PrimRef], side: impl Fn(Vec3A) -> u32) -> (usize, BoxA, BoxA) {
-    let (mut lcb, mut rcb) = (BoxA::EMPTY, BoxA::EMPTY);
-    let (mut i, mut j) = (0usize, idx.len());
-    loop {
-        while i < j {
-            let c = idx[i].centroid();
-            if side(c) == 0 {
-                break;
-            }
-            lcb = lcb.grow(c);
-            i += 1;
-        }
-        while i < j {
-            let c = idx[j - 1].centroid();
-            if side(c) != 0 {
-                break;
-            }
-            rcb = rcb.grow(c);
-            j -= 1;
-        }
-        if i >= j {
-            break;
-        }
-        // idx[i] belongs right and idx[j - 1] left.
-        idx.swap(i, j - 1);
-        lcb = lcb.grow(idx[i].centroid());
-        rcb = rcb.grow(idx[j - 1].centroid());
-        i += 1;
-        j -= 1;
-    }
-    (i, lcb, rcb)
-}
-
-/// [`partition_hoare`] without a branch per reference (Lomuto's scheme with
-/// the side as the increment of the left end: each reference is swapped to
-/// the left end, which advances when it belongs left). Near the top of a
-/// tree the side is unpredictable, and a branching scan pays a misprediction
-/// for about every other reference. Both sides hold the same references as
-/// with [`partition_hoare`]; only their order inside a side differs, which
+/// In-place partition of `idx` by `side(centroid)` (1: left), gathering each
+/// side's centroid box; returns the left count and the two boxes. No branch
+/// per reference (Lomuto's scheme with the side as the increment of the left
+/// end: each reference is swapped to the left end, which advances when it
+/// belongs left): the side of a reference is unpredictable near the top of a
+/// tree, and a branching scan pays a misprediction for about every other one.
+///
+/// Nodes under 1024 references used to take Hoare's branching scan (both
+/// ends inward, swapping misplaced pairs), chosen from a loop that built one
+/// mesh thousands of times in a row: there the branch predictor learns the
+/// mesh's partitions, which a user's single build never has. In `rtdiff
+/// bench --race` (rtdiff's build between Embree's builds and ray tracing, as
+/// in an application) the branchless scan for every node builds suzanne
+/// 0.21 -> 0.20 ms and dragon_87k 23.6-24.0 -> 20.5 ms on one thread. The
+/// sides hold the same references in either scheme; the order inside a side
 /// changes no binned split (bins, counts and boxes do not depend on order;
 /// only the split by count of a node whose centroids all coincide does) and
 /// no answer (ties between primitives go by id).
@@ -424,8 +387,7 @@ impl SahSplit {
         // arithmetic on all three lanes and read at `axis`.
         let limit = Vec3A::splat((s + 1) as f32);
         let side = |c: Vec3A| ((c - cb.min) * scale).cmplt(limit).bitmask() >> axis & 1;
-        let (i, lcb, rcb) =
-            if n >= BRANCHLESS_PARTITION { partition_branchless(idx, side) } else { partition_hoare(idx, side) };
+        let (i, lcb, rcb) = partition_branchless(idx, side);
         debug_assert_eq!(i, nl);
         Some(Split { mid: nl, bounds: Some((lb, rb)), centroids: Some((lcb, rcb)) })
     }
