@@ -6,7 +6,9 @@
 //!
 //! `cargo run --release [--features embree] --example call_path -- MESH SET N TRACER [REPEAT]`
 //! with SET one of `primary`, `incoherent`, `shadow`, `batch-primary`, `batch-shadow`
-//! (N rays, traced REPEAT times when a fifth argument is given), or `build` (N builds, counted by `--toggle-collect=call_path::build_all`), and TRACER one of `native`, `embree`, `embree-default` (MEDIUM quality).
+//! (N rays, traced REPEAT times when a fifth argument is given), `build-cold` (N
+//! builds, each timed after a build by the other tracer, as in the race: the
+//! median is printed), or `build` (N builds, counted by `--toggle-collect=call_path::build_all`), and TRACER one of `native`, `embree`, `embree-default` (MEDIUM quality).
 
 use std::path::Path;
 
@@ -67,6 +69,27 @@ fn main() -> rtdiff::Result<()> {
         },
         other => return Err(rtdiff::Error::Invalid(format!("unknown tracer {other}"))),
     };
+    if set == "build-cold" {
+        // As in `rtdiff bench --race`: each timed build (CPU time of the
+        // thread) follows a build by the other tracer, which leaves the
+        // caches and the branch predictor to someone else's code and data.
+        let other = AccelConfig {
+            backend: if which == "native" { Backend::Embree } else { Backend::Native },
+            embree_quality: EmbreeQuality::Medium,
+            embree_mode: EmbreeMode::Default,
+            ..native
+        };
+        let mut times = Vec::with_capacity(n);
+        for _ in 0..n {
+            std::hint::black_box(build_tracer(prims.clone(), &other)?);
+            let (t, r) = rtdiff::perf::clock::cpu_seconds(|| build_tracer(prims.clone(), &cfg).map(|_| ()));
+            r?;
+            times.push(t);
+        }
+        times.sort_by(f64::total_cmp);
+        println!("{mesh} build-cold {which}: median {:.4} ms over {n} builds", 1e3 * times[n / 2]);
+        return Ok(());
+    }
     if set == "build" {
         build_all(&prims, &cfg, n)?;
         println!("{mesh} build: {n} builds");
