@@ -223,7 +223,9 @@ fn tri4_sse(p: &Tri4, ray: &Ray, wr: &WatertightRay) -> (u32, u32, [f32; PW], [f
         let [kx, ky, kz] = wr.k;
         // Each row is 16 bytes at a 16-byte multiple inside a 32-byte aligned packet: aligned loads are valid.
         let ld = |r: usize| _mm_load_ps(p.v[r].as_ptr());
-        let (ox, oy, oz) = (_mm_set1_ps(ray.origin[kx]), _mm_set1_ps(ray.origin[ky]), _mm_set1_ps(ray.origin[kz]));
+        // Array indexing (one load) rather than glam's `Index`, a three-way match.
+        let o = ray.origin.to_array();
+        let (ox, oy, oz) = (_mm_set1_ps(o[kx]), _mm_set1_ps(o[ky]), _mm_set1_ps(o[kz]));
         let (sx, sy, sz) = (_mm_set1_ps(wr.s.x), _mm_set1_ps(wr.s.y), _mm_set1_ps(wr.s.z));
         // a = v0 - o, b = v1 - o, c = v2 - o on the permuted axes.
         let (a_x, a_y, a_z) = (_mm_sub_ps(ld(kx), ox), _mm_sub_ps(ld(ky), oy), _mm_sub_ps(ld(kz), oz));

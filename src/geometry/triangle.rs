@@ -131,11 +131,13 @@ impl WatertightRay {
         let mut kx = (kz + 1) % 3;
         let mut ky = (kx + 1) % 3;
         // Keep the winding of the edge functions independent of the sign of dir[kz].
-        if dir[kz] < 0.0 {
+        // Array indexing (one load) rather than glam's `Index`, a three-way match.
+        let d = dir.to_array();
+        if d[kz] < 0.0 {
             std::mem::swap(&mut kx, &mut ky);
         }
-        let dz = dir[kz];
-        Self { k: [kx, ky, kz], s: Vec3::new(dir[kx] / dz, dir[ky] / dz, 1.0 / dz) }
+        let dz = d[kz];
+        Self { k: [kx, ky, kz], s: Vec3::new(d[kx] / dz, d[ky] / dz, 1.0 / dz) }
     }
 }
 
