@@ -5,7 +5,8 @@
 //! --toggle-collect=call_path::trace_all` counts only the tracing.
 //!
 //! `cargo run --release [--features embree] --example call_path -- MESH SET N TRACER [REPEAT]`
-//! with SET one of `primary`, `incoherent`, `shadow`, `batch-primary`, `batch-shadow`
+//! with SET one of `primary`, `incoherent`, `shadow`, `batch-primary`, `batch-shadow`, `miss` (rays
+//! that leave the mesh's bounds: the per-call cost alone)
 //! (N rays, traced REPEAT times when a fifth argument is given), `build-cold` (N
 //! builds, each timed after a build by the other tracer, as in the race: the
 //! median is printed), or `build` (N builds, counted by `--toggle-collect=call_path::build_all`), and TRACER one of `native`, `embree`, `embree-default` (MEDIUM quality).
@@ -97,12 +98,26 @@ fn main() -> rtdiff::Result<()> {
     }
     let reference = build_tracer(prims.clone(), &native)?;
     let sets = RaySets::new(&prims, 512, 262_144, reference.as_ref());
+    // Rays that start outside the mesh's bounds and point away from it: the
+    // per-call cost alone (entry, ray setup, one root test).
+    let bounds = prims.world_bounds();
+    let centre = 0.5 * (bounds.min + bounds.max);
+    let far = 2.0 * (bounds.max - bounds.min).length().max(1.0);
+    let miss: Vec<Ray> = sets
+        .incoherent
+        .iter()
+        .map(|r| {
+            let d = r.dir.normalize_or_zero();
+            Ray::new(centre + far * d, d)
+        })
+        .collect();
     let (base, any, batch) = match set {
         "primary" => (&sets.primary, false, false),
         "incoherent" => (&sets.incoherent, false, false),
         "shadow" => (&sets.shadow, true, false),
         "batch-primary" => (&sets.primary, false, true),
         "batch-shadow" => (&sets.shadow, true, true),
+        "miss" => (&miss, false, false),
         other => return Err(rtdiff::Error::Invalid(format!("unknown set {other}"))),
     };
     // A contiguous block from the middle of the set (whole image rows for
