@@ -114,30 +114,45 @@ pub struct BuildInput {
 }
 
 impl BuildInput {
-    /// Vertex means when `vertex_means` is set (computed in parallel).
+    /// Vertex means when `vertex_means` is set (computed in parallel for large meshes).
     pub fn new(prims: &Primitives, vertex_means: bool) -> Self {
-        let vertex_means = (0..if vertex_means { prims.len() } else { 0 })
-            .into_par_iter()
-            .with_min_len(4096)
-            .map(|i| match prims.get(i) {
-                Prim::Triangle(t) => Vec3A::from((t.v[0] + t.v[1] + t.v[2]) / 3.0),
-                Prim::Sphere(s) => Vec3A::from(s.center),
-            })
-            .collect();
+        let n = if vertex_means { prims.len() } else { 0 };
+        let mean = |i: usize| match prims.get(i) {
+            Prim::Triangle(t) => Vec3A::from((t.v[0] + t.v[1] + t.v[2]) / 3.0),
+            Prim::Sphere(s) => Vec3A::from(s.center),
+        };
+        let vertex_means = if parallel_pass(n) {
+            (0..n).into_par_iter().with_min_len(PARALLEL_PASS).map(mean).collect()
+        } else {
+            (0..n).map(mean).collect()
+        };
         Self { vertex_means }
     }
 }
 
-/// A reference for every primitive, in id order (computed in parallel).
+/// Whether a pass over `n` items runs on the pool: large passes with more
+/// than one thread. Otherwise it runs on the calling thread: a parallel
+/// iterator called from outside the pool hands even an empty pass to a pool
+/// thread and waits for it. (Measured: whole one-thread builds called from
+/// the main thread took the same time either way on this machine, whose
+/// pool threads were still spinning between builds; the handoff is left out
+/// because it can only add a wake-up.)
+#[inline]
+pub fn parallel_pass(n: usize) -> bool {
+    n >= PARALLEL_PASS && rayon::current_num_threads() > 1
+}
+
+/// A reference for every primitive, in id order (computed in parallel for large meshes).
 pub fn prim_refs(prims: &Primitives) -> Vec<PrimRef> {
-    (0..prims.len())
-        .into_par_iter()
-        .with_min_len(4096)
-        .map(|i| {
-            let b = prims.bounds(i);
-            PrimRef::new(i as u32, BoxA { min: b.min.into(), max: b.max.into() })
-        })
-        .collect()
+    let make = |i: usize| {
+        let b = prims.bounds(i);
+        PrimRef::new(i as u32, BoxA { min: b.min.into(), max: b.max.into() })
+    };
+    if parallel_pass(prims.len()) {
+        (0..prims.len()).into_par_iter().with_min_len(PARALLEL_PASS).map(make).collect()
+    } else {
+        (0..prims.len()).map(make).collect()
+    }
 }
 
 /// Union of the boxes of `refs`.
@@ -159,7 +174,7 @@ pub fn root_bounds(refs: &[PrimRef]) -> (BoxA, BoxA) {
     let one = |c: &[PrimRef]| {
         c.iter().fold((BoxA::EMPTY, BoxA::EMPTY), |(b, cb), r| (b.union(r.boxa()), cb.grow(r.centroid())))
     };
-    if refs.len() >= PARALLEL_PASS && rayon::current_num_threads() > 1 {
+    if parallel_pass(refs.len()) {
         refs.par_chunks(PARALLEL_PASS)
             .map(one)
             .reduce(|| (BoxA::EMPTY, BoxA::EMPTY), |(a, ca), (b, cb)| (a.union(b), ca.union(cb)))
@@ -240,7 +255,7 @@ pub fn build_tree(prims: &Primitives, splitter: &dyn Splitter) -> BuiltTree {
         let (root, centroids) = root_bounds(&refs);
         build_node(splitter, &input, &mut refs, root.aabb(), Some(centroids), 0, 0, &mut nodes);
     }
-    let order = if refs.len() >= PARALLEL_PASS && rayon::current_num_threads() > 1 {
+    let order = if parallel_pass(refs.len()) {
         refs.par_iter().with_min_len(PARALLEL_PASS).map(PrimRef::id).collect()
     } else {
         refs.iter().map(PrimRef::id).collect()
