@@ -70,9 +70,10 @@ impl Soa {
         let mut d = [[0.0f32; PACKET]; 3];
         for i in 0..PACKET {
             let r = &rays[i.min(rays.len() - 1)];
-            for a in 0..3 {
-                s.o[a][i] = r.origin[a];
-                d[a][i] = r.dir[a];
+            let (o, dir) = (r.origin.to_array(), r.dir.to_array());
+            for (a, (o_row, d_row)) in s.o.iter_mut().zip(d.iter_mut()).enumerate() {
+                o_row[i] = o[a];
+                d_row[i] = dir[a];
             }
             s.t_min[i] = r.t_min;
             s.cull[i] = cull_bound(r.t_max);
@@ -80,10 +81,10 @@ impl Soa {
         // The single-ray path's per-ray constants (`WidePre`: `dir.recip()`
         // and `inv * far_scale()`), as whole rows: the same IEEE divisions
         // and products lane for lane, which the compiler makes eight-wide.
-        for a in 0..3 {
-            for i in 0..PACKET {
-                s.inv[a][i] = 1.0 / d[a][i];
-                s.inv_far[a][i] = s.inv[a][i] * far_scale();
+        for (inv_row, (far_row, d_row)) in s.inv.iter_mut().zip(s.inv_far.iter_mut().zip(&d)) {
+            for ((inv, far), &x) in inv_row.iter_mut().zip(far_row.iter_mut()).zip(d_row) {
+                *inv = 1.0 / x;
+                *far = *inv * far_scale();
             }
         }
         s
