@@ -56,13 +56,22 @@ pub struct Rendered {
 
 /// Render `scene` to its final image with the tracer its `accel` asks for.
 pub fn render_scene(scene: &Scene, opts: &RenderOptions) -> Result<Rendered> {
-    let t0 = Instant::now();
-    // Built on the render's threads (`--threads`), whichever the backend.
-    let tracer = crate::render::with_threads(opts.threads, || build_tracer(scene.prims.clone(), &scene.accel))??;
-    let build_ms = t0.elapsed().as_secs_f64() * 1e3;
-    let mut out = render_with(scene, tracer.as_ref(), opts)?;
-    out.stats.build_ms = build_ms;
-    Ok(out)
+    if let Some(n) = opts.threads {
+        crate::limits::check_flag("--threads", n, 1, crate::limits::MAX_THREADS)?;
+    }
+    // One pool of the render's threads (`--threads`, at most one per image
+    // row, as `render` caps it) for the build and the render, whichever the
+    // backend: a pool per stage started and stopped its threads twice.
+    let threads = opts.threads.map(|n| n.min(scene.height.max(1) as usize));
+    crate::render::with_threads(threads, || {
+        let t0 = Instant::now();
+        let tracer = build_tracer(scene.prims.clone(), &scene.accel)?;
+        let build_ms = t0.elapsed().as_secs_f64() * 1e3;
+        // Already on the pool: the render runs on it as it stands.
+        let mut out = render_with(scene, tracer.as_ref(), &RenderOptions { threads: None, ..opts.clone() })?;
+        out.stats.build_ms = build_ms;
+        Ok(out)
+    })?
 }
 
 /// Render `scene` to its final image with a `tracer` the caller built (for
