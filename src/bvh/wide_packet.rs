@@ -15,7 +15,8 @@
 //! once, with the single-ray arithmetic lane for lane (each ray on its own
 //! axis permutation of the watertight test); other leaves are tested ray by
 //! ray with the single-ray leaf code, and an inner node that at most
-//! `SINGLE_RAYS` of the packet's rays reach is walked by each of them alone
+//! `SINGLE_RAYS` (closest hit) or `SINGLE_RAYS_ANY` (any hit) of the packet's
+//! rays reach is walked by each of them alone
 //! with the single-ray traversal. Each ray's answer is therefore the
 //! single-ray answer, bit for bit (the tests check it against brute force).
 
@@ -590,8 +591,23 @@ fn shear8(rays: &[Ray]) -> Sheared {
 /// with `rtdiff bench --race 3` (batch primary rays, ratio to Embree robust
 /// MEDIUM, two runs each): from 2 rays dragon_full 0.95 / 0.95, from 4 rays
 /// 0.99 / 1.00, from 5 rays 1.01 / 1.01; suzanne and dragon_87k within the
-/// noise for all three, and shadow packets within the noise from 2 or 4.
+/// noise for all three. Measured again in one binary (stop 24, `--race 3`,
+/// batch primary Mrays/s, two runs): from 3 rays suzanne 46.6 / 42.8,
+/// dragon_87k 19.8 / 18.9, dragon_full 13.0 / 12.9; from 4: 46.4 / 45.3,
+/// 19.4 / 19.5, 13.2 / 13.2; from 5: 44.6 / 44.1, 18.8 / 19.0, 12.5 / 13.0.
 const SINGLE_RAYS: u32 = 4;
+
+/// [`SINGLE_RAYS`] for the any-hit packet: an inner node that at most this
+/// many of its rays still reach is walked by each of them alone. Lower than
+/// for closest hits: a shadow ray alone stops at its first occluder and
+/// needs no ordering. Measured in one binary (the value read from an
+/// environment variable for the measurement only), `rtdiff bench --race 5
+/// --threads 1`, batch shadow rays, Mrays/s: from 4 rays suzanne 15.8-16.1,
+/// dragon_87k 5.8, dragon_full 3.19 (race 3); from 2 rays 16.0-16.5, 6.0-6.2,
+/// 3.29-3.34; from 1 or 0 rays the same as 2 on suzanne and dragon_87k, and
+/// from 0 dragon_full 3.23-3.25; from 6 or 8 rays slower everywhere (8:
+/// suzanne 9.5).
+const SINGLE_RAYS_ANY: u32 = 2;
 
 /// Occlusion of up to [`PACKET`] rays, answers into `out` (same length).
 ///
@@ -626,7 +642,7 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, rays
         if m0 == 0 {
             continue;
         }
-        if m0.count_ones() <= SINGLE_RAYS {
+        if m0.count_ones() <= SINGLE_RAYS_ANY {
             // Too few rays left for eight-lane box tests to pay: each walks
             // this subtree alone (the same box tests, lane for lane).
             let mut m = m0;
