@@ -77,23 +77,7 @@ fn entry(node: &Node, children: Option<(&Entry, &Entry)>) -> Entry {
         return Entry { cost: [c; WIDTH + 1], split: [0; WIDTH + 1], as_leaf: true, range: (node.offset, node.count) };
     };
     let range = (l.range.0, l.range.1 + r.range.1);
-    // dist[i]: both children in at most i lanes (each needs at least one).
-    let (cl, cr) = (l.cost, r.cost);
-    let mut dist = [f32::INFINITY; WIDTH + 1];
-    let mut split = [0u8; WIDTH + 1];
-    for i in 2..=WIDTH {
-        for j in 1..i {
-            let c = cl[j] + cr[i - j];
-            // `split[i] == 0`: take the first candidate even when every cost
-            // is infinite or NaN (box areas that overflow f32), so that
-            // `emit` always splits into 1..i lanes; a 0 here made it ask
-            // for lane count 0 and index `cost[n][0 - 1]`.
-            if c < dist[i] || split[i] == 0 {
-                dist[i] = c;
-                split[i] = j as u8;
-            }
-        }
-    }
+    let (dist, split) = both_children(&l.cost, &r.cost);
     let as_node = NODE_COST * area + dist[WIDTH];
     let count = range.1;
     let as_leaf = if count <= MAX_LEAF { PACKET_COST * packets_for(count) as f32 * area } else { f32::INFINITY };
@@ -105,6 +89,51 @@ fn entry(node: &Node, children: Option<(&Entry, &Entry)>) -> Entry {
         row[i] = dist[i].min(row[i - 1]);
     }
     Entry { cost: row, split, as_leaf: as_leaf <= as_node, range }
+}
+
+/// `(dist, split)`: `dist[i]` is the cheapest way to give both children (each
+/// at least one lane) at most `i` lanes together, `2 <= i <= WIDTH`, and
+/// `split[i]` the left child's lanes in it: the smallest `j` among the
+/// cheapest `cl[j] + cr[i - j]`, and `j = 1` when no sum compares below the
+/// first (every cost infinite or NaN, from box areas that overflow `f32`), so
+/// that `emit` always splits into `1..i` lanes (a 0 there made it ask for
+/// lane count 0 and index `cost[n][0 - 1]`). Index 0 and 1 are not used.
+///
+/// A min-plus convolution, written lane-parallel over `i` (one pass per `j`,
+/// compare and select, no branches) so that it compiles to vector code. As a
+/// branching double loop it ran a quarter of the instructions of a suzanne
+/// build (callgrind, 200 builds: 104.0M -> 94.3M instructions with this
+/// form; the build's time did not change measurably).
+#[inline]
+fn both_children(cl: &Row, cr: &Row) -> (Row, [u8; WIDTH + 1]) {
+    // `shifted[WIDTH + m] = cr[m]` for `m >= 1` and infinity below, so that
+    // lanes `i = 1..=WIDTH` read `cr[i - j]` from `shifted[WIDTH + 1 - j..]`,
+    // infinite where `i - j < 1` (a sum the lane never takes).
+    let mut shifted = [f32::INFINITY; 2 * WIDTH + 1];
+    shifted[WIDTH + 1..].copy_from_slice(&cr[1..]);
+    // Lane `i - 1` holds `i`. j = 1 is taken unconditionally (see above).
+    let mut dist = [0.0f32; WIDTH];
+    for (i, d) in dist.iter_mut().enumerate() {
+        *d = cl[1] + shifted[WIDTH + i];
+    }
+    let mut split = [1u32; WIDTH];
+    for j in 2..WIDTH {
+        let a = cl[j];
+        let src = &shifted[WIDTH + 1 - j..2 * WIDTH + 1 - j];
+        for i in 0..WIDTH {
+            let c = a + src[i];
+            let take = c < dist[i];
+            dist[i] = if take { c } else { dist[i] };
+            split[i] = if take { j as u32 } else { split[i] };
+        }
+    }
+    let mut d = [f32::INFINITY; WIDTH + 1];
+    let mut s = [0u8; WIDTH + 1];
+    for i in 2..=WIDTH {
+        d[i] = dist[i - 1];
+        s[i] = split[i - 1] as u8;
+    }
+    (d, s)
 }
 
 /// Fill `t`, the entries of the subtree of binary node `base` (the nodes
@@ -263,6 +292,55 @@ mod tests {
             })
             .collect();
         Primitives { triangles, spheres: Vec::new() }
+    }
+
+    /// The double loop `both_children` replaced (the definition).
+    fn both_children_reference(cl: &Row, cr: &Row) -> (Row, [u8; WIDTH + 1]) {
+        let mut dist = [f32::INFINITY; WIDTH + 1];
+        let mut split = [0u8; WIDTH + 1];
+        for i in 2..=WIDTH {
+            for j in 1..i {
+                let c = cl[j] + cr[i - j];
+                if c < dist[i] || split[i] == 0 {
+                    dist[i] = c;
+                    split[i] = j as u8;
+                }
+            }
+        }
+        (dist, split)
+    }
+
+    #[test]
+    fn lane_parallel_convolution_is_the_double_loop() {
+        // Rows as `entry` makes them (non-increasing from lane 1) and arbitrary
+        // ones, with ties, zeros, infinities and NaNs.
+        let mut rng = Pcg32::new(17, 3);
+        let specials = [0.0, f32::INFINITY, f32::NAN, f32::MAX, 1.0, 0.5];
+        for case in 0..20_000 {
+            let mut row = |monotone: bool| {
+                let mut r: Row = [0.0; WIDTH + 1];
+                for i in 1..=WIDTH {
+                    r[i] = match rng.next_u32() % 8 {
+                        0 => specials[(rng.next_u32() % specials.len() as u32) as usize],
+                        1 if i > 1 => r[i - 1],
+                        _ => (rng.next_u32() % 16) as f32 * 0.25,
+                    };
+                    if monotone && i > 1 {
+                        r[i] = r[i].min(r[i - 1]);
+                    }
+                }
+                r
+            };
+            let monotone = case % 2 == 0;
+            let (cl, cr) = (row(monotone), row(monotone));
+            let (d, s) = both_children(&cl, &cr);
+            let (d_ref, s_ref) = both_children_reference(&cl, &cr);
+            for i in 2..=WIDTH {
+                assert_eq!(d[i].to_bits(), d_ref[i].to_bits(), "dist[{i}] of {cl:?} and {cr:?}");
+                assert_eq!(s[i], s_ref[i], "split[{i}] of {cl:?} and {cr:?}");
+                assert!((1..i as u8).contains(&s[i]));
+            }
+        }
     }
 
     /// Walk the wide tree: every primitive slot is in exactly one leaf lane,

@@ -295,7 +295,9 @@ macro_rules! closest {
                 $counts.node(cur.child);
                 let (mut mask, near) = $box8!(node, &q, cull);
                 if mask != 0 {
-                    $self.prefetch_children(node, mask);
+                    if $self.prefetch_all {
+                        $self.prefetch_children(node, mask);
+                    }
                     let first = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
                     if mask == 0 {
@@ -541,20 +543,21 @@ pub struct WideBvh {
     isa: Isa,
     /// Wide nodes on the longest root-to-leaf path (sizes the traversal stack).
     levels: usize,
-    /// The tree outgrows a core's L2 cache ([`PREFETCH_ALL_BYTES`]): the
-    /// any-hit and packet walks prefetch their hit children too (the
-    /// single-ray closest-hit walk always does).
+    /// The tree outgrows a core's L2 cache ([`PREFETCH_ALL_BYTES`]): every
+    /// walk (closest and any hit, single rays and packets) prefetches its hit
+    /// children.
     pub(super) prefetch_all: bool,
 }
 
 /// Trees larger than this (a core's L2 cache on current x86 CPUs is 0.5-2
-/// MiB) fetch most nodes from L3 or memory, and the any-hit and packet walks
-/// prefetch every hit child as the closest-hit walk does. Measured with
-/// `rtdiff bench --race` (one binary, the choice read from an environment
-/// variable for the measurement only): dragon_full (48 MB) shadow rays +7%,
-/// batch shadow +9%, batch primary +3%; dragon_87k (4.8 MB) no change;
-/// suzanne (51 KiB) shadow rays 3-4% slower with the prefetches (more
-/// instructions, nothing to hide).
+/// MiB) fetch most nodes from L3 or memory, and every walk prefetches each hit
+/// child. Measured with `rtdiff bench --race` (one binary, the choice read
+/// from an environment variable for the measurement only): dragon_full (48
+/// MB) shadow rays +7%, batch shadow +9%, batch primary +3%; dragon_87k (4.8
+/// MB) no change; suzanne (51 KiB) shadow rays 3-4% slower with the
+/// prefetches (more instructions, nothing to hide), and primary rays 3%
+/// slower with the closest-hit walk's (which prefetched in every tree until
+/// stop 25: 9% of suzanne's traversal instructions).
 pub const PREFETCH_ALL_BYTES: usize = 2 << 20;
 
 impl WideBvh {
