@@ -197,7 +197,7 @@ pub trait Splitter: Sync {
     /// `depth`) and return `m` with `0 < m < refs.len()` to split it into
     /// `refs[..m]` and `refs[m..]`, or `None` to make the node a leaf. May also
     /// return the exact boxes of the two sides when it has them.
-    /// `centroids` is the box around the node's centroids when the parent's split computed it.
+    /// `centroids` is the box around the node's centroids when the caller has it (the root's).
     fn split(
         &self,
         input: &BuildInput,
@@ -214,13 +214,11 @@ pub struct Split {
     pub mid: usize,
     /// Boxes of the left and right sides, if the strategy computed them.
     pub bounds: Option<(Aabb, Aabb)>,
-    /// Boxes around the centroids of the left and right sides, if computed.
-    pub centroids: Option<(BoxA, BoxA)>,
 }
 
 impl From<usize> for Split {
     fn from(mid: usize) -> Self {
-        Split { mid, bounds: None, centroids: None }
+        Split { mid, bounds: None }
     }
 }
 
@@ -288,11 +286,11 @@ fn build_node(
     if n <= 1 || depth >= s.max_depth() {
         return;
     }
-    let Some(Split { mid, bounds: child_bounds, centroids: child_cb }) = s.split(input, idx, &bounds, centroids, depth)
-    else {
+    let Some(Split { mid, bounds: child_bounds }) = s.split(input, idx, &bounds, centroids, depth) else {
         return;
     };
-    let (lc, rc) = child_cb.map_or((None, None), |(l, r)| (Some(l), Some(r)));
+    // Children compute their own centroid boxes when they need them (see
+    // `build_sah::partition_branchless`); only the root's comes from outside.
     assert!(mid > 0 && mid < n, "split strategy returned an empty side");
     let (l, r) = idx.split_at_mut(mid);
     let (lb, rb) = child_bounds.unwrap_or_else(|| (bounds_of(l), bounds_of(r)));
@@ -303,10 +301,10 @@ fn build_node(
         // as in the sequential order); only the right one is built apart and
         // copied after it.
         let ((), rv) = rayon::join(
-            || build_node(s, input, l, lb, lc, first, depth + 1, out),
+            || build_node(s, input, l, lb, None, first, depth + 1, out),
             || {
                 let mut v = Vec::with_capacity(2 * r.len());
-                build_node(s, input, r, rb, rc, right_first, depth + 1, &mut v);
+                build_node(s, input, r, rb, None, right_first, depth + 1, &mut v);
                 v
             },
         );
@@ -314,9 +312,9 @@ fn build_node(
         append_shifted(out, &rv);
         out[me] = Node::interior(bounds, right);
     } else {
-        build_node(s, input, l, lb, lc, first, depth + 1, out);
+        build_node(s, input, l, lb, None, first, depth + 1, out);
         let right = out.len() as u32;
-        build_node(s, input, r, rb, rc, right_first, depth + 1, out);
+        build_node(s, input, r, rb, None, right_first, depth + 1, out);
         out[me] = Node::interior(bounds, right);
     }
 }

@@ -236,12 +236,12 @@ fn bin_into2(
     boxes.iter_mut().zip(boxes2.iter()).for_each(|(x, y)| *x = x.union(*y));
 }
 
-/// In-place partition of `idx` by `side(centroid)` (1: left), gathering each
-/// side's centroid box; returns the left count and the two boxes. No branch
-/// per reference (Lomuto's scheme with the side as the increment of the left
-/// end: each reference is swapped to the left end, which advances when it
-/// belongs left): the side of a reference is unpredictable near the top of a
-/// tree, and a branching scan pays a misprediction for about every other one.
+/// In-place partition of `idx` by `side(centroid)` (1: left); returns the
+/// left count. No branch per reference (Lomuto's scheme with the side as the
+/// increment of the left end: each reference is swapped to the left end,
+/// which advances when it belongs left): the side of a reference is
+/// unpredictable near the top of a tree, and a branching scan pays a
+/// misprediction for about every other one.
 ///
 /// Nodes under 1024 references used to take Hoare's branching scan (both
 /// ends inward, swapping misplaced pairs), chosen from a loop that built one
@@ -254,22 +254,25 @@ fn bin_into2(
 /// changes no binned split (bins, counts and boxes do not depend on order;
 /// only the split by count of a node whose centroids all coincide does) and
 /// no answer (ties between primitives go by id).
+///
+/// The loop also gathered the two sides' centroid boxes, with selects (SSE2
+/// has no blend: three instructions each), which made it twice as long; each
+/// child now computes its own in a separate read-only pass. Same boxes (a
+/// minimum and a maximum are exact in any order), hence the same tree;
+/// `examples/call_path.rs MESH build-cold N`, one binary with the two forms
+/// switched: suzanne 0.164-0.165 -> 0.151-0.156 ms, dragon_87k 19.9-20.0 ->
+/// 18.1-18.5 ms.
 #[inline(always)]
-fn partition_branchless(idx: &mut [PrimRef], side: impl Fn(Vec3A) -> u32) -> (usize, BoxA, BoxA) {
-    let (mut lcb, mut rcb) = (BoxA::EMPTY, BoxA::EMPTY);
+fn partition_branchless(idx: &mut [PrimRef], side: impl Fn(Vec3A) -> u32) -> usize {
     let mut j = 0usize;
     for i in 0..idx.len() {
         let x = idx[i];
-        let c = x.centroid();
-        let left = side(c);
-        let m = glam::BVec3A::splat(left != 0);
-        lcb = BoxA { min: Vec3A::select(m, lcb.min.min(c), lcb.min), max: Vec3A::select(m, lcb.max.max(c), lcb.max) };
-        rcb = BoxA { min: Vec3A::select(m, rcb.min, rcb.min.min(c)), max: Vec3A::select(m, rcb.max, rcb.max.max(c)) };
+        let left = side(x.centroid());
         idx[i] = idx[j];
         idx[j] = x;
         j += left as usize;
     }
-    (j, lcb, rcb)
+    j
 }
 
 impl SahSplit {
@@ -387,9 +390,12 @@ impl SahSplit {
         // arithmetic on all three lanes and read at `axis`.
         let limit = Vec3A::splat((s + 1) as f32);
         let side = |c: Vec3A| ((c - cb.min) * scale).cmplt(limit).bitmask() >> axis & 1;
-        let (i, lcb, rcb) = partition_branchless(idx, side);
+        let i = partition_branchless(idx, side);
         debug_assert_eq!(i, nl);
-        Some(Split { mid: nl, bounds: Some((lb, rb)), centroids: Some((lcb, rcb)) })
+        // The children's centroid boxes are left to the children (one
+        // read-only pass each, `centroid_bounds_of`, and none for a child of
+        // at most `BLOCK` references, which becomes a leaf before needing it).
+        Some(Split { mid: nl, bounds: Some((lb, rb)) })
     }
 }
 

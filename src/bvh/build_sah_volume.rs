@@ -76,7 +76,7 @@ impl Splitter for VolumeSplit {
             }
         }
         let (s, _, bl, br) = best?;
-        Some(Split { mid: partition(idx, |r| bin(r) <= s), bounds: Some((bl, br)), centroids: None })
+        Some(Split { mid: partition(idx, |r| bin(r) <= s), bounds: Some((bl, br)) })
     }
 }
 
