@@ -128,6 +128,14 @@ struct Scratch {
     boxes2: Vec<BoxA>,
 }
 
+/// Make `v` at least `n` long (new entries `value`; existing ones kept).
+#[inline(always)]
+fn grow<T: Copy>(v: &mut Vec<T>, n: usize, value: T) {
+    if v.len() < n {
+        v.resize(n, value);
+    }
+}
+
 /// Primitive slots a leaf of `n` primitives costs: `n` rounded up to whole packets of [`BLOCK`].
 pub fn leaf_slots(n: usize) -> usize {
     n.div_ceil(BLOCK) * BLOCK
@@ -290,16 +298,15 @@ impl SahSplit {
         let n = idx.len();
         let last = nb as u32 - 1;
         let Scratch { count, boxes, soa, right_area, right_count, count2, boxes2 } = scratch;
-        count.clear();
-        count.resize(nb, UVec4::ZERO);
-        boxes.clear();
-        boxes.resize(3 * nb, BoxA::EMPTY);
-        right_area.clear();
-        right_area.resize(nb, Vec3A::ZERO);
-        right_count.clear();
-        right_count.resize(nb, Vec3A::ZERO);
-        soa.clear();
-        soa.resize(nb, Transposed::EMPTY);
+        // The bins are accumulated into, so they start empty; the sweep
+        // arrays are written before they are read and only need the room.
+        grow(count, nb, UVec4::ZERO);
+        count[..nb].fill(UVec4::ZERO);
+        grow(boxes, 3 * nb, BoxA::EMPTY);
+        boxes[..3 * nb].fill(BoxA::EMPTY);
+        grow(right_area, nb, Vec3A::ZERO);
+        grow(right_count, nb, Vec3A::ZERO);
+        grow(soa, nb, Transposed::EMPTY);
         let lastf = Vec3A::splat(last as f32);
         let (count, boxes) = (&mut count[..nb], &mut boxes[..3 * nb]);
         if n >= PARALLEL_BINNING && rayon::current_num_threads() > 1 {
@@ -323,10 +330,10 @@ impl SahSplit {
             count.copy_from_slice(&c);
             boxes.copy_from_slice(&b);
         } else if n >= TWO_WAY_BINNING {
-            count2.clear();
-            count2.resize(nb, UVec4::ZERO);
-            boxes2.clear();
-            boxes2.resize(3 * nb, BoxA::EMPTY);
+            grow(count2, nb, UVec4::ZERO);
+            count2[..nb].fill(UVec4::ZERO);
+            grow(boxes2, 3 * nb, BoxA::EMPTY);
+            boxes2[..3 * nb].fill(BoxA::EMPTY);
             bin_into2(idx, count, boxes, &mut count2[..nb], &mut boxes2[..3 * nb], cb.min, scale, lastf);
         } else {
             bin_into(idx, count, boxes, cb.min, scale, lastf);
