@@ -8,7 +8,8 @@
 //! with SET one of `primary`, `incoherent`, `shadow`, `batch-primary`, `batch-shadow`, `miss` (rays
 //! that leave the mesh's bounds: the per-call cost alone)
 //! (N rays, traced REPEAT times when a fifth argument is given), `build-cold` (N
-//! builds, each timed after a build by the other tracer, as in the race: the
+//! builds, each timed after builds by the other tracer, Embree on a device
+//! with the pool's thread count as in the race; `--features embree`; the
 //! median is printed), or `build` (N builds, counted by `--toggle-collect=call_path::build_all`), and TRACER one of `native`, `embree`, `embree-default` (MEDIUM quality).
 
 use std::path::Path;
@@ -72,37 +73,46 @@ fn main() -> rtdiff::Result<()> {
     };
     if set == "build-cold" {
         // As in `rtdiff bench --race`: each timed build (CPU time of the
-        // thread) follows a build by the other tracer, which leaves the
-        // caches and the branch predictor to someone else's code and data.
-        let other = AccelConfig {
-            backend: if which == "native" { Backend::Embree } else { Backend::Native },
-            embree_quality: EmbreeQuality::Medium,
-            embree_mode: EmbreeMode::Default,
-            ..native
-        };
-        // Embree on a device with the pool's thread count, as the race makes
-        // it: a default device keeps worker threads spinning after each build,
-        // which takes the other core (or hyperthread) from the timed build.
+        // thread) follows builds by the other tracer (Embree: MEDIUM and HIGH
+        // quality, robust and default mode), which leave the caches and the
+        // branch predictor to someone else's code and data. Embree builds on
+        // a device with the pool's thread count, as in the race: a default
+        // device keeps worker threads spinning after each build, which takes
+        // the other core (or hyperthread) from the timed build.
         #[cfg(feature = "embree")]
         let device = rtdiff::embree::Device::new(&format!("threads={}", rayon::current_num_threads()))?;
+        #[cfg(feature = "embree")]
+        let embree_build = |q: EmbreeQuality, m: EmbreeMode| -> rtdiff::Result<()> {
+            std::hint::black_box(rtdiff::embree::EmbreeTracer::with_mode(&device, prims.clone(), q, m)?);
+            Ok(())
+        };
+        #[cfg(not(feature = "embree"))]
+        let embree_build = |_: EmbreeQuality, _: EmbreeMode| -> rtdiff::Result<()> {
+            Err(rtdiff::Error::Invalid("build-cold needs --features embree".into()))
+        };
         let other_build = || -> rtdiff::Result<()> {
-            #[cfg(feature = "embree")]
             if which == "native" {
                 for q in [EmbreeQuality::Medium, EmbreeQuality::High] {
                     for m in [EmbreeMode::Robust, EmbreeMode::Default] {
-                        std::hint::black_box(rtdiff::embree::EmbreeTracer::with_mode(&device, prims.clone(), q, m)?);
+                        embree_build(q, m)?;
                     }
                 }
-                return Ok(());
+            } else {
+                std::hint::black_box(build_tracer(prims.clone(), &native)?);
             }
-            std::hint::black_box(build_tracer(prims.clone(), &other)?);
             Ok(())
+        };
+        let timed_build = || -> rtdiff::Result<()> {
+            match which {
+                "native" => build_tracer(prims.clone(), &cfg).map(|_| ()),
+                _ => embree_build(cfg.embree_quality, cfg.embree_mode),
+            }
         };
         let (mut cpu, mut wall) = (Vec::with_capacity(n), Vec::with_capacity(n));
         for _ in 0..n {
             other_build()?;
             let start = std::time::Instant::now();
-            let (t, r) = rtdiff::perf::clock::cpu_seconds(|| build_tracer(prims.clone(), &cfg).map(|_| ()));
+            let (t, r) = rtdiff::perf::clock::cpu_seconds(timed_build);
             wall.push(start.elapsed().as_secs_f64());
             r?;
             cpu.push(t);

@@ -9,10 +9,11 @@
 //!
 //! On a shared machine the load changes from second to second, so lone
 //! absolute times mean little. Each round times rtdiff and every Embree mode
-//! back to back on the same chunk of rays (rotating who goes first) and
-//! records each ratio; the report gives the median ratio and its quartiles
-//! over the rounds. A ratio above 1 means rtdiff is faster (throughput ratio
-//! for rays, time ratio Embree / rtdiff for builds). One thread is timed by
+//! back to back on the same chunk of rays (in an order drawn afresh for every
+//! round and chunk, see `run_order`) and records each ratio; the report
+//! gives the median ratio and its quartiles over the rounds. A ratio above 1
+//! means rtdiff is faster (throughput ratio for rays, time ratio Embree /
+//! rtdiff for builds). One thread is timed by
 //! the CPU time of the working thread, more threads by the wall clock.
 //!
 //! Like for like: rtdiff's watertight test is exact where Embree's robust
@@ -247,9 +248,7 @@ pub fn race_mesh(
             // each Embree mode on the device; construction only.
             let mut ours_t = 0.0;
             let mut theirs_t = vec![0.0; m];
-            for slot in 0..=m {
-                // Rotate who goes first from round to round.
-                let k = (slot + round) % (m + 1);
+            for k in run_order(m + 1, round, 0) {
                 if k == m {
                     let (t, r) = pool.install(|| {
                         let mut b = || build_tracer(prims.clone(), &cfg).map(|_| 0);
@@ -276,8 +275,7 @@ pub fn race_mesh(
                     // Load the chunk before anyone runs: otherwise whoever goes
                     // first pays for bringing the rays into the cache.
                     std::hint::black_box(chunk.iter().map(|r| r.origin.x + r.dir.x + r.t_max).sum::<f32>());
-                    for slot in 0..=m {
-                        let k = (slot + round + c) % (m + 1);
+                    for k in run_order(m + 1, round, 1 + c) {
                         let tracer: &dyn crate::accel::Tracer = if k == m { ours.as_ref() } else { &theirs[k] };
                         let (t, h) = pool.install(|| time(&mut || run(tracer, chunk, *any, *batch, threads)));
                         if k == m {
@@ -309,6 +307,30 @@ pub fn race_mesh(
     })
 }
 
+/// The order in which the `n` contestants (index `n - 1`: rtdiff) run in
+/// part `part` (0: the builds, `1 + c`: ray chunk `c`) of round `round`: a
+/// permutation drawn from a generator seeded by both, so that over the rounds
+/// each contestant goes first, last and after every other one about equally
+/// often.
+///
+/// A rotation (`(slot + round) % n`, before stop 25) kept the cyclic order,
+/// so each contestant always ran right after the same one: rtdiff's build
+/// always followed Embree's HIGH-quality default-mode build (the heaviest,
+/// 1.7 ms on suzanne against 0.2 ms for the others) and Embree's default
+/// MEDIUM build always followed its robust HIGH one. The predecessor moves a
+/// small build by 10-30% (suzanne, 15 rounds, the same binary: rtdiff 0.19 ms
+/// and Embree default MEDIUM 0.16 ms with the rotation, 0.17 and 0.21 ms
+/// with this order).
+#[cfg(feature = "embree")]
+fn run_order(n: usize, round: usize, part: usize) -> Vec<usize> {
+    let mut rng = crate::rng::Pcg32::new(round as u64, part as u64);
+    let mut order: Vec<usize> = (0..n).collect();
+    for i in (1..n).rev() {
+        order.swap(i, rng.next_u32() as usize % (i + 1));
+    }
+    order
+}
+
 /// Time `f` with the race's clock for `threads`.
 #[cfg(feature = "embree")]
 fn time_result(
@@ -336,4 +358,32 @@ pub fn race_mesh(
     Err(crate::Error::Invalid(
         "--race needs the Embree backend: run scripts/setup-embree.sh and build with --features embree".into(),
     ))
+}
+
+#[cfg(all(test, feature = "embree"))]
+mod tests {
+    use super::run_order;
+
+    #[test]
+    fn every_contestant_follows_every_other() {
+        // Five contestants as in the race; over 60 rounds each ordered pair
+        // (a right after b) occurs, and each order is a permutation.
+        let n = 5;
+        let mut follows = vec![vec![0u32; n]; n];
+        for round in 0..60 {
+            let order = run_order(n, round, 0);
+            let mut sorted = order.clone();
+            sorted.sort_unstable();
+            assert_eq!(sorted, (0..n).collect::<Vec<_>>());
+            for w in order.windows(2) {
+                follows[w[1]][w[0]] += 1;
+            }
+            assert_eq!(order, run_order(n, round, 0), "deterministic");
+        }
+        for (a, row) in follows.iter().enumerate() {
+            for (b, &count) in row.iter().enumerate() {
+                assert!(a == b || count > 0, "{a} never ran right after {b}");
+            }
+        }
+    }
 }
