@@ -155,12 +155,12 @@ pub fn progress_bar(rows: u64, quiet: bool, msg: &'static str) -> indicatif::Pro
 /// Run `work` on a pool of `threads` workers (None: the global pool of all cores).
 ///
 /// A count equal to that of the pool the caller is in (the global pool
-/// outside any) runs `work` there rather than on a new pool: a dropped pool's
-/// threads wind down while the next pool's start, and on a machine with as
-/// many cores as threads they take cores from it
-/// (`cornell_box_parallelogram_light`, 400x400, 2 threads on 2 cores, renders
-/// one after another in one process: 92 ms when the previous render's pool had
-/// just been dropped, 80 ms when it had not).
+/// outside any) runs `work` there rather than on a new pool. Starting a pool
+/// per call made repeated renders in one process slow and erratic when the
+/// threads fill the cores, as the previous pool's threads wind down beside the
+/// new ones: `cornell_box_parallelogram_light`, 400x400, 2 threads on 2 cores,
+/// native renders took 92 ms (quartiles 83-100) after a native render and 80
+/// ms after an Embree one; on the caller's pool, 77 ms after either.
 pub fn with_threads<T: Send>(threads: Option<usize>, work: impl FnOnce() -> T + Send) -> Result<T> {
     match threads {
         Some(0) => Err(Error::Invalid("--threads must be at least 1".into())),
