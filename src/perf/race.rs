@@ -316,11 +316,9 @@ pub fn race_mesh(
 /// A rotation (`(slot + round) % n`, before stop 25) kept the cyclic order,
 /// so each contestant always ran right after the same one: rtdiff's build
 /// always followed Embree's HIGH-quality default-mode build (the heaviest,
-/// 1.7 ms on suzanne against 0.2 ms for the others) and Embree's default
-/// MEDIUM build always followed its robust HIGH one. The predecessor moves a
-/// small build by 10-30% (suzanne, 15 rounds, the same binary: rtdiff 0.19 ms
-/// and Embree default MEDIUM 0.16 ms with the rotation, 0.17 and 0.21 ms
-/// with this order).
+/// 1.7 ms on suzanne against about 0.2 ms for the others) and Embree's
+/// default MEDIUM build always followed its robust HIGH one. The predecessor
+/// moves a small build by 10-30% (docs/bvh.md, issue 16, sixth pass).
 #[cfg(feature = "embree")]
 fn run_order(n: usize, round: usize, part: usize) -> Vec<usize> {
     let mut rng = crate::rng::Pcg32::new(round as u64, part as u64);
