@@ -100,10 +100,10 @@ fn entry(node: &Node, children: Option<(&Entry, &Entry)>) -> Entry {
 /// lane count 0 and index `cost[n][0 - 1]`). Index 0 and 1 are not used.
 ///
 /// A min-plus convolution, written lane-parallel over `i` (one pass per `j`,
-/// compare and select, no branches) so that it compiles to vector code. As a
-/// branching double loop it ran a quarter of the instructions of a suzanne
-/// build (callgrind, 200 builds: 104.0M -> 94.3M instructions with this
-/// form; the build's time did not change measurably).
+/// compare and select, no branches) so that it compiles to vector code
+/// (callgrind, 50 suzanne builds on one thread: 97.2M -> 94.7M instructions
+/// against the branching double loop; the build's time did not change
+/// measurably).
 #[inline]
 fn both_children(cl: &Row, cr: &Row) -> (Row, [u8; WIDTH + 1]) {
     // `shifted[WIDTH + m] = cr[m]` for `m >= 1` and infinity below, so that

@@ -557,7 +557,7 @@ pub struct WideBvh {
 /// MB) no change; suzanne (51 KiB) shadow rays 3-4% slower with the
 /// prefetches (more instructions, nothing to hide), and primary rays 3%
 /// slower with the closest-hit walk's (which prefetched in every tree until
-/// stop 25: 9% of suzanne's traversal instructions).
+/// stop 25: 7% of the instructions of suzanne's incoherent rays).
 pub const PREFETCH_ALL_BYTES: usize = 2 << 20;
 
 impl WideBvh {
