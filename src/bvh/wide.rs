@@ -276,7 +276,7 @@ struct Entry {
 /// generic over the box test; the closest hit before
 /// [`LeafPrims::finish`] (a sphere's `(u, v)` not yet made).
 macro_rules! closest {
-    ($self:ident, $ray:ident, $start:expr, $k:ty, $pre:ident, $box8:ident, $simd:expr, $counts:expr, $stack:expr) => {{
+    ($self:ident, $ray:ident, $start:expr, $k:ty, $pre:ident, $box8:ident, $simd:expr, $counts:expr, $stack:expr, $pf:expr) => {{
         let pre = WidePre::new($ray);
         let q = $pre!(&pre);
         // The shear of the triangle test is made at the first leaf: most
@@ -295,7 +295,7 @@ macro_rules! closest {
                 $counts.node(cur.child);
                 let (mut mask, near) = $box8!(node, &q, cull);
                 if mask != 0 {
-                    if $self.prefetch_all {
+                    if $pf {
                         $self.prefetch_children(node, mask);
                     }
                     let first = mask.trailing_zeros() as usize;
@@ -372,7 +372,7 @@ macro_rules! closest {
 
 /// Any-hit traversal, generic over the box test (any order gives the same answer).
 macro_rules! any_hit {
-    ($self:ident, $ray:ident, $start:expr, $k:ty, $pre:ident, $box8:ident, $simd:expr, $counts:expr, $stack:expr) => {{
+    ($self:ident, $ray:ident, $start:expr, $k:ty, $pre:ident, $box8:ident, $simd:expr, $counts:expr, $stack:expr, $pf:expr) => {{
         let pre = WidePre::new($ray);
         let q = $pre!(&pre);
         let mut wr: Option<WatertightRay> = None;
@@ -390,7 +390,7 @@ macro_rules! any_hit {
             let node = &nodes[index as usize];
             $counts.node(index);
             let (mut mask, near) = $box8!(node, &q, cull);
-            if $self.prefetch_all {
+            if $pf {
                 $self.prefetch_children(node, mask);
             }
             // The nearest of the entered inner nodes is stacked first, so it
@@ -545,7 +545,9 @@ pub struct WideBvh {
     levels: usize,
     /// The tree outgrows a core's L2 cache ([`PREFETCH_ALL_BYTES`]): every
     /// walk (closest and any hit, single rays and packets) prefetches its hit
-    /// children.
+    /// children. The AVX2 walks take it as a const parameter (`P`, chosen
+    /// once in [`WideBvh::kernels`]), so a small tree's walks have no prefetch
+    /// code at all.
     pub(super) prefetch_all: bool,
 }
 
@@ -689,21 +691,21 @@ impl WideBvh {
         let shallow = self.levels * (WIDTH - 1) <= SHALLOW_STACK;
         #[cfg(target_arch = "x86_64")]
         if self.isa == Isa::Avx2 {
-            use super::wide_packet::{any8, closest8};
-            return if shallow {
+            /// The AVX2 entry points with stack size `S` and the prefetch choice `P`.
+            fn avx2<K: TriangleKernel, const S: usize, const P: bool>() -> Kernels {
+                use super::wide_packet::{any8, closest8};
                 Kernels {
-                    closest: closest_avx2::<K, SHALLOW_STACK>,
-                    any: any_avx2::<K, SHALLOW_STACK>,
-                    closest8: closest8::<K, SHALLOW_STACK>,
-                    any8: any8::<K, SHALLOW_STACK>,
+                    closest: closest_avx2::<K, S, P>,
+                    any: any_avx2::<K, S, P>,
+                    closest8: closest8::<K, S, P>,
+                    any8: any8::<K, S, P>,
                 }
-            } else {
-                Kernels {
-                    closest: closest_avx2::<K, STACK>,
-                    any: any_avx2::<K, STACK>,
-                    closest8: closest8::<K, STACK>,
-                    any8: any8::<K, STACK>,
-                }
+            }
+            return match (shallow, self.prefetch_all) {
+                (true, false) => avx2::<K, SHALLOW_STACK, false>(),
+                (true, true) => avx2::<K, SHALLOW_STACK, true>(),
+                (false, false) => avx2::<K, STACK, false>(),
+                (false, true) => avx2::<K, STACK, true>(),
             };
         }
         let (closest, any): (ClosestFn, AnyFn) = if shallow {
@@ -739,7 +741,13 @@ impl WideBvh {
         #[cfg(target_arch = "x86_64")]
         if self.isa == Isa::Avx2 {
             // SAFETY: isa is Avx2 only when the CPU reports AVX2.
-            return unsafe { self.closest_avx2_impl::<K, C, STACK>(ray, counts) };
+            return unsafe {
+                if self.prefetch_all {
+                    self.closest_avx2_impl::<K, C, STACK, true>(ray, counts)
+                } else {
+                    self.closest_avx2_impl::<K, C, STACK, false>(ray, counts)
+                }
+            };
         }
         self.closest_portable_impl::<K, C, STACK>(ray, counts)
     }
@@ -768,7 +776,13 @@ impl WideBvh {
         #[cfg(target_arch = "x86_64")]
         if self.isa == Isa::Avx2 {
             // SAFETY: isa is Avx2 only when the CPU reports AVX2.
-            return unsafe { self.any_avx2_impl::<K, C, STACK>(ray, counts) };
+            return unsafe {
+                if self.prefetch_all {
+                    self.any_avx2_impl::<K, C, STACK, true>(ray, counts)
+                } else {
+                    self.any_avx2_impl::<K, C, STACK, false>(ray, counts)
+                }
+            };
         }
         self.any_portable_impl::<K, C, STACK>(ray, counts)
     }
@@ -872,18 +886,23 @@ impl WideBvh {
         ray: &Ray,
         counts: &mut C,
     ) -> Option<Hit> {
-        self.prims.finish(closest!(self, ray, 0, K, portable_pre, box8_portable, false, counts, S), ray)
+        self.prims
+            .finish(closest!(self, ray, 0, K, portable_pre, box8_portable, false, counts, S, self.prefetch_all), ray)
     }
 
     #[inline(always)]
     fn any_portable_impl<K: TriangleKernel, C: Count, const S: usize>(&self, ray: &Ray, counts: &mut C) -> bool {
-        any_hit!(self, ray, 0, K, portable_pre, box8_portable, false, counts, S)
+        any_hit!(self, ray, 0, K, portable_pre, box8_portable, false, counts, S, self.prefetch_all)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn closest_avx2_impl<K: TriangleKernel, C: Count, const S: usize>(&self, ray: &Ray, counts: &mut C) -> Option<Hit> {
-        self.prims.finish(closest!(self, ray, 0, K, avx2_pre, box8_avx2, true, counts, S), ray)
+    fn closest_avx2_impl<K: TriangleKernel, C: Count, const S: usize, const P: bool>(
+        &self,
+        ray: &Ray,
+        counts: &mut C,
+    ) -> Option<Hit> {
+        self.prims.finish(closest!(self, ray, 0, K, avx2_pre, box8_avx2, true, counts, S, P), ray)
     }
 
     /// The AVX2 closest-hit walk of the subtree under node `start` alone,
@@ -891,22 +910,34 @@ impl WideBvh {
     /// when few of its rays are left).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    pub(super) fn closest_avx2_from<K: TriangleKernel, const S: usize>(&self, ray: &Ray, start: u32) -> Option<Hit> {
-        closest!(self, ray, start, K, avx2_pre, box8_avx2, true, &mut (), S)
+    pub(super) fn closest_avx2_from<K: TriangleKernel, const S: usize, const P: bool>(
+        &self,
+        ray: &Ray,
+        start: u32,
+    ) -> Option<Hit> {
+        closest!(self, ray, start, K, avx2_pre, box8_avx2, true, &mut (), S, P)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn any_avx2_impl<K: TriangleKernel, C: Count, const S: usize>(&self, ray: &Ray, counts: &mut C) -> bool {
-        any_hit!(self, ray, 0, K, avx2_pre, box8_avx2, true, counts, S)
+    fn any_avx2_impl<K: TriangleKernel, C: Count, const S: usize, const P: bool>(
+        &self,
+        ray: &Ray,
+        counts: &mut C,
+    ) -> bool {
+        any_hit!(self, ray, 0, K, avx2_pre, box8_avx2, true, counts, S, P)
     }
 
     /// The AVX2 any-hit walk of the subtree under node `start` alone (the
     /// packet walk's switch to single rays when few of its rays are left).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    pub(super) fn any_avx2_from<K: TriangleKernel, const S: usize>(&self, ray: &Ray, start: u32) -> bool {
-        any_hit!(self, ray, start, K, avx2_pre, box8_avx2, true, &mut (), S)
+    pub(super) fn any_avx2_from<K: TriangleKernel, const S: usize, const P: bool>(
+        &self,
+        ray: &Ray,
+        start: u32,
+    ) -> bool {
+        any_hit!(self, ray, start, K, avx2_pre, box8_avx2, true, &mut (), S, P)
     }
 }
 
@@ -928,22 +959,22 @@ unsafe fn any_portable<K: TriangleKernel, const S: usize>(bvh: &WideBvh, ray: &R
 
 /// The AVX2 closest-hit entry point (only called when the CPU has AVX2).
 #[cfg(target_arch = "x86_64")]
-unsafe fn closest_avx2<K: TriangleKernel, const S: usize>(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
+unsafe fn closest_avx2<K: TriangleKernel, const S: usize, const P: bool>(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
     if bvh.nodes.is_empty() {
         return None;
     }
     // SAFETY: the caller guarantees AVX2 (`WideBvh::kernels`).
-    unsafe { bvh.closest_avx2_impl::<K, (), S>(ray, &mut ()) }
+    unsafe { bvh.closest_avx2_impl::<K, (), S, P>(ray, &mut ()) }
 }
 
 /// The AVX2 any-hit entry point (only called when the CPU has AVX2).
 #[cfg(target_arch = "x86_64")]
-unsafe fn any_avx2<K: TriangleKernel, const S: usize>(bvh: &WideBvh, ray: &Ray) -> bool {
+unsafe fn any_avx2<K: TriangleKernel, const S: usize, const P: bool>(bvh: &WideBvh, ray: &Ray) -> bool {
     if bvh.nodes.is_empty() {
         return false;
     }
     // SAFETY: the caller guarantees AVX2 (`WideBvh::kernels`).
-    unsafe { bvh.any_avx2_impl::<K, (), S>(ray, &mut ()) }
+    unsafe { bvh.any_avx2_impl::<K, (), S, P>(ray, &mut ()) }
 }
 
 /// The portable packet entry point: each ray through the single-ray kernel.

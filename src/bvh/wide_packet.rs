@@ -335,13 +335,19 @@ unsafe fn tri_x8(
     }
 }
 
-/// Closest hits of up to [`PACKET`] rays, answers into `out` (same length).
+/// Closest hits of up to [`PACKET`] rays, answers into `out` (same length);
+/// `S` is the traversal stack's size, `P` whether hit children are
+/// prefetched (`WideBvh::prefetch_all`, fixed per tree by `WideBvh::kernels`).
 ///
 /// # Safety
 /// The CPU must have AVX2; `bvh` must be non-empty; `rays` holds 1 to 8 rays.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, rays: &[Ray], out: &mut [Option<Hit>]) {
+pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize, const P: bool>(
+    bvh: &WideBvh,
+    rays: &[Ray],
+    out: &mut [Option<Hit>],
+) {
     use std::arch::x86_64::*;
     let n = rays.len();
     let mut soa = Soa::new(rays);
@@ -370,7 +376,7 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, 
             while m != 0 {
                 let i = m.trailing_zeros() as usize;
                 m &= m - 1;
-                if let Some(h) = bvh.closest_avx2_from::<K, S>(&r[i], cur.child)
+                if let Some(h) = bvh.closest_avx2_from::<K, S, P>(&r[i], cur.child)
                     && Hit::offer(&mut best[i], &mut r[i], h)
                 {
                     soa.cull[i] = cull_bound(r[i].t_max);
@@ -412,7 +418,7 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, 
                 k += 1;
             }
             if k > 0 {
-                if bvh.prefetch_all {
+                if P {
                     let mut lanes = 0u32;
                     for &(_, l) in &hit[..k] {
                         lanes |= 1 << l;
@@ -615,7 +621,11 @@ const SINGLE_RAYS_ANY: u32 = 2;
 /// As [`closest8`].
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-pub(super) unsafe fn any8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, rays: &[Ray], out: &mut [bool]) {
+pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool>(
+    bvh: &WideBvh,
+    rays: &[Ray],
+    out: &mut [bool],
+) {
     use std::arch::x86_64::*;
     let n = rays.len();
     let soa = Soa::new(rays);
@@ -649,7 +659,7 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, rays
             while m != 0 {
                 let i = m.trailing_zeros() as usize;
                 m &= m - 1;
-                if bvh.any_avx2_from::<K, S>(&rays[i], index) {
+                if bvh.any_avx2_from::<K, S, P>(&rays[i], index) {
                     open &= !(1 << i);
                 }
             }
@@ -685,7 +695,7 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize>(bvh: &WideBvh, rays
                 }
                 inner[ni] = (node.child[l], m, t);
                 ni += 1;
-                if bvh.prefetch_all {
+                if P {
                     // Searched after this node's leaves.
                     bvh.prefetch_children(node, 1 << l);
                 }
