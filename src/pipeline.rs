@@ -56,13 +56,10 @@ pub struct Rendered {
 
 /// Render `scene` to its final image with the tracer its `accel` asks for.
 pub fn render_scene(scene: &Scene, opts: &RenderOptions) -> Result<Rendered> {
-    if let Some(n) = opts.threads {
-        crate::limits::check_flag("--threads", n, 1, crate::limits::MAX_THREADS)?;
-    }
-    // One pool of the render's threads (`--threads`, at most one per image
-    // row, as `render` caps it) for the build and the render, whichever the
-    // backend: a pool per stage started and stopped its threads twice.
-    let threads = opts.threads.map(|n| n.min(scene.height.max(1) as usize));
+    // One pool of the render's threads for the build and the render,
+    // whichever the backend: a pool per stage started and stopped its threads
+    // twice.
+    let threads = crate::render::render_threads(opts.threads, scene.height)?;
     crate::render::with_threads(threads, || {
         let t0 = Instant::now();
         let tracer = build_tracer(scene.prims.clone(), &scene.accel)?;

@@ -174,11 +174,20 @@ pub fn with_threads<T: Send>(threads: Option<usize>, work: impl FnOnce() -> T + 
     }
 }
 
-/// Render `scene` with hits from `tracer`.
-pub fn render(scene: &Scene, tracer: &dyn Tracer, opts: &RenderOptions) -> Result<RenderResult> {
-    if let Some(n) = opts.threads {
+/// The pool size for rendering `height` rows with `threads` (`--threads`;
+/// None: the global pool): checked against the limits and capped at one
+/// thread per row, since work is split by rows (a 3-row render with
+/// `--threads 1024` would only spend time starting threads).
+pub fn render_threads(threads: Option<usize>, height: u32) -> Result<Option<usize>> {
+    if let Some(n) = threads {
         crate::limits::check_flag("--threads", n, 1, crate::limits::MAX_THREADS)?;
     }
+    Ok(threads.map(|n| n.min(height.max(1) as usize)))
+}
+
+/// Render `scene` with hits from `tracer`.
+pub fn render(scene: &Scene, tracer: &dyn Tracer, opts: &RenderOptions) -> Result<RenderResult> {
+    let threads = render_threads(opts.threads, scene.height)?;
     crate::scene::validate::check_render_work(scene)?;
     let plan = scene.plan();
     let integ = integrator::create(scene, tracer, plan);
@@ -199,9 +208,7 @@ pub fn render(scene: &Scene, tracer: &dyn Tracer, opts: &RenderOptions) -> Resul
             })
             .collect::<Vec<Counters>>()
     };
-    // Work is split by rows: a pool larger than the image's row count (a
-    // 3-row render with `--threads 1024`) would only spend time starting threads.
-    let rows = with_threads(opts.threads.map(|n| n.min(h as usize)), work)?;
+    let rows = with_threads(threads, work)?;
     let seconds = start.elapsed().as_secs_f64();
     bar.finish_and_clear();
     let mut counters = Counters::default();

@@ -13,8 +13,8 @@
 //! round and chunk, see `run_order`) and records each ratio; the report
 //! gives the median ratio and its quartiles over the rounds. A ratio above 1
 //! means rtdiff is faster (throughput ratio for rays, time ratio Embree /
-//! rtdiff for builds). One thread is timed by
-//! the CPU time of the working thread, more threads by the wall clock.
+//! rtdiff for builds). One thread is timed by the CPU time of the working
+//! thread, more threads by the wall clock.
 //!
 //! Like for like: rtdiff's watertight test is exact where Embree's robust
 //! mode is only watertight along edges and its default mode is neither
@@ -324,7 +324,7 @@ fn run_order(n: usize, round: usize, part: usize) -> Vec<usize> {
     let mut rng = crate::rng::Pcg32::new(round as u64, part as u64);
     let mut order: Vec<usize> = (0..n).collect();
     for i in (1..n).rev() {
-        order.swap(i, rng.next_u32() as usize % (i + 1));
+        order.swap(i, rng.below(i as u32 + 1) as usize);
     }
     order
 }
