@@ -63,6 +63,7 @@ fn main() -> rtdiff::Result<()> {
     };
     let cfg = match which {
         "native" => native,
+        "native-mt" => AccelConfig { triangle_test: rtdiff::geometry::TriangleTest::MollerTrumbore, ..native },
         "embree" | "embree-default" => AccelConfig {
             backend: Backend::Embree,
             embree_quality: EmbreeQuality::Medium,

@@ -201,6 +201,37 @@ impl TriPackets {
     }
 }
 
+impl TriPackets {
+    /// SIMD Moller-Trumbore closest-hit test of a leaf; same results as
+    /// [`Self::intersect_leaf_scalar`] with the Moller-Trumbore test (see
+    /// [`tri4_mt_sse`]).
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    pub fn intersect_leaf_simd_mt(&self, first: u32, count: u32, ray: &mut Ray, best: &mut Option<Hit>) -> bool {
+        let mut changed = false;
+        for p in &self.packets[first as usize..first as usize + packets_for(count)] {
+            let (mut ok, t, u, v) = tri4_mt_sse(p, ray);
+            // Lane order is slot order, and `offer` compares each hit with the
+            // best so far: the scalar loop's answer (it tests later slots
+            // against the shortened interval, which `offer`'s comparison
+            // with the best hit repeats).
+            while ok != 0 {
+                let l = ok.trailing_zeros() as usize;
+                ok &= ok - 1;
+                changed |= offer(best, ray, t[l], p.id[l], u[l], v[l]);
+            }
+        }
+        changed
+    }
+
+    /// SIMD Moller-Trumbore any-hit test of a leaf.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    pub fn occluded_leaf_simd_mt(&self, first: u32, count: u32, ray: &Ray) -> bool {
+        self.packets[first as usize..first as usize + packets_for(count)].iter().any(|p| tri4_mt_sse(p, ray).0 != 0)
+    }
+}
+
 /// Offer hit `(t, id, u, v)` (already within `ray`'s interval) under the
 /// shared tie rule [`Hit::offer`].
 #[inline(always)]
@@ -306,5 +337,132 @@ fn tri4_sse(p: &Tri4, ray: &Ray, wr: &WatertightRay) -> (u32, u32, [f32; PW], [f
         _mm_storeu_ps(us.as_mut_ptr(), _mm_mul_ps(e1, inv_det));
         _mm_storeu_ps(vs.as_mut_ptr(), _mm_mul_ps(e2, inv_det));
         (_mm_movemask_ps(ok) as u32, zero_mask, ts, us, vs)
+    }
+}
+
+/// The Moller-Trumbore test on four lanes: `(hit mask, t, u, v)`, lane for
+/// lane the operations of
+/// [`crate::geometry::triangle::intersect_moller_trumbore`] in the same order
+/// (glam's `cross` and `dot` written out: `dot` is `(x x' + y y') + z z'`,
+/// no fused multiply-add), so every lane's answer is the scalar routine's bit
+/// for bit; its rejections are the same comparisons, with NaN going the same
+/// way (a NaN `v` passes `v < 0 || u + v > 1`, as there).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn tri4_mt_sse(p: &Tri4, ray: &Ray) -> (u32, [f32; PW], [f32; PW], [f32; PW]) {
+    use std::arch::x86_64::*;
+    // SAFETY: SSE and SSE2 are part of the x86_64 baseline, so these intrinsics are
+    // available on every x86_64 CPU; the loads and stores are justified where they occur.
+    unsafe {
+        // Each row is 16 bytes at a 16-byte multiple inside a 32-byte aligned packet: aligned loads are valid.
+        let ld = |r: usize| _mm_load_ps(p.v[r].as_ptr());
+        let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
+        let (dx, dy, dz) = (_mm_set1_ps(d[0]), _mm_set1_ps(d[1]), _mm_set1_ps(d[2]));
+        let (v0x, v0y, v0z) = (ld(0), ld(1), ld(2));
+        // e1 = v1 - v0, e2 = v2 - v0.
+        let (e1x, e1y, e1z) = (_mm_sub_ps(ld(3), v0x), _mm_sub_ps(ld(4), v0y), _mm_sub_ps(ld(5), v0z));
+        let (e2x, e2y, e2z) = (_mm_sub_ps(ld(6), v0x), _mm_sub_ps(ld(7), v0y), _mm_sub_ps(ld(8), v0z));
+        let dot = |ax: __m128, ay: __m128, az: __m128, bx: __m128, by: __m128, bz: __m128| {
+            _mm_add_ps(_mm_add_ps(_mm_mul_ps(ax, bx), _mm_mul_ps(ay, by)), _mm_mul_ps(az, bz))
+        };
+        // p = dir x e2 (glam: x = a.y b.z - b.y a.z, y = a.z b.x - b.z a.x, z = a.x b.y - b.x a.y).
+        let px = _mm_sub_ps(_mm_mul_ps(dy, e2z), _mm_mul_ps(e2y, dz));
+        let py = _mm_sub_ps(_mm_mul_ps(dz, e2x), _mm_mul_ps(e2z, dx));
+        let pz = _mm_sub_ps(_mm_mul_ps(dx, e2y), _mm_mul_ps(e2x, dy));
+        let det = dot(e1x, e1y, e1z, px, py, pz);
+        let (zero, one) = (_mm_setzero_ps(), _mm_set1_ps(1.0));
+        // `det == 0 || !det.is_finite()` rejects: keep 0 < |det| < inf (a NaN fails both).
+        let abs_det = _mm_andnot_ps(_mm_set1_ps(-0.0), det);
+        let det_ok = _mm_and_ps(_mm_cmpgt_ps(abs_det, zero), _mm_cmplt_ps(abs_det, _mm_set1_ps(f32::INFINITY)));
+        let inv_det = _mm_div_ps(one, det);
+        // tv = origin - v0.
+        let (tvx, tvy, tvz) =
+            (_mm_sub_ps(_mm_set1_ps(o[0]), v0x), _mm_sub_ps(_mm_set1_ps(o[1]), v0y), _mm_sub_ps(_mm_set1_ps(o[2]), v0z));
+        let u = _mm_mul_ps(dot(tvx, tvy, tvz, px, py, pz), inv_det);
+        // `(0.0..=1.0).contains(&u)`: ordered comparisons, a NaN fails.
+        let ok = _mm_and_ps(det_ok, _mm_and_ps(_mm_cmpge_ps(u, zero), _mm_cmple_ps(u, one)));
+        if _mm_movemask_ps(ok) == 0 {
+            // Most packets are missed here: skip the second cross product and the stores.
+            return (0, [0.0; PW], [0.0; PW], [0.0; PW]);
+        }
+        // q = tv x e1.
+        let qx = _mm_sub_ps(_mm_mul_ps(tvy, e1z), _mm_mul_ps(e1y, tvz));
+        let qy = _mm_sub_ps(_mm_mul_ps(tvz, e1x), _mm_mul_ps(e1z, tvx));
+        let qz = _mm_sub_ps(_mm_mul_ps(tvx, e1y), _mm_mul_ps(e1x, tvy));
+        let v = _mm_mul_ps(dot(dx, dy, dz, qx, qy, qz), inv_det);
+        let v_out = _mm_or_ps(_mm_cmplt_ps(v, zero), _mm_cmpgt_ps(_mm_add_ps(u, v), one));
+        let t = _mm_mul_ps(dot(e2x, e2y, e2z, qx, qy, qz), inv_det);
+        // `!(t >= t_min && t <= t_max)` rejects: ordered comparisons, a NaN t fails.
+        let in_range = _mm_and_ps(_mm_cmpge_ps(t, _mm_set1_ps(ray.t_min)), _mm_cmple_ps(t, _mm_set1_ps(ray.t_max)));
+        let ok = _mm_andnot_ps(v_out, _mm_and_ps(ok, in_range));
+        let (mut ts, mut us, mut vs) = ([0.0f32; PW], [0.0f32; PW], [0.0f32; PW]);
+        // Each array has room for 4 floats; storeu has no alignment requirement.
+        _mm_storeu_ps(ts.as_mut_ptr(), t);
+        _mm_storeu_ps(us.as_mut_ptr(), u);
+        _mm_storeu_ps(vs.as_mut_ptr(), v);
+        (_mm_movemask_ps(ok) as u32, ts, us, vs)
+    }
+}
+
+#[cfg(all(test, target_arch = "x86_64"))]
+mod tests {
+    use super::*;
+    use crate::geometry::triangle::intersect_moller_trumbore;
+    use crate::rng::Pcg32;
+
+    /// A float that is often special: 0, -0, tiny, huge, infinite, NaN, or a
+    /// coordinate near the others (shared vertices, grazing rays).
+    fn coord(rng: &mut Pcg32) -> f32 {
+        match rng.below(48) {
+            0 => 0.0,
+            1 => -0.0,
+            2 => f32::MIN_POSITIVE * rng.next_f32(),
+            3 => 1e30 * (rng.next_f32() - 0.5),
+            4 => f32::INFINITY,
+            5 => f32::NAN,
+            6 => 1.0,
+            _ => 2.0 * rng.next_f32() - 1.0,
+        }
+    }
+
+    #[test]
+    fn moller_trumbore_lanes_are_the_scalar_routine() {
+        let mut rng = Pcg32::new(0x4d54, 7);
+        let (mut hits, mut cases) = (0, 0);
+        for _ in 0..50_000 {
+            let mut p = Tri4 { v: [[0.0; PW]; 9], id: [0, 1, 2, 3] };
+            // Lanes share vertices now and then, as a mesh's neighbours do.
+            for l in 0..PW {
+                for r in 0..9 {
+                    p.v[r][l] = if l > 0 && rng.below(4) == 0 { p.v[r][l - 1] } else { coord(&mut rng) };
+                }
+            }
+            let v3 = |a: f32, b: f32, c: f32| glam::Vec3::new(a, b, c);
+            let origin = v3(coord(&mut rng), coord(&mut rng), coord(&mut rng));
+            let mut dir = v3(coord(&mut rng), coord(&mut rng), coord(&mut rng));
+            if rng.below(2) == 0 {
+                // Aim at (or just beside) one lane's triangle: hits, edges and vertices.
+                let l = rng.below(PW as u32) as usize;
+                let (a, b) = (1.2 * rng.next_f32() - 0.1, 1.2 * rng.next_f32() - 0.1);
+                let (v0, v1, v2) = (p.vertex(0, l), p.vertex(1, l), p.vertex(2, l));
+                dir = v0 + a * (v1 - v0) + b * (v2 - v0) - origin;
+            }
+            let mut ray = Ray::new(origin, dir);
+            if rng.below(4) == 0 {
+                ray.t_min = rng.next_f32();
+                ray.t_max = ray.t_min + 4.0 * rng.next_f32();
+            }
+            let (mask, t, u, v) = tri4_mt_sse(&p, &ray);
+            for l in 0..PW {
+                let scalar = intersect_moller_trumbore(&ray, p.vertex(0, l), p.vertex(1, l), p.vertex(2, l));
+                let simd = (mask >> l & 1 != 0).then(|| (t[l], u[l], v[l]));
+                let bits = |h: Option<(f32, f32, f32)>| h.map(|(a, b, c)| (a.to_bits(), b.to_bits(), c.to_bits()));
+                assert_eq!(bits(simd), bits(scalar), "lane {l} of {p:?}, {ray:?}");
+                hits += usize::from(scalar.is_some());
+                cases += 1;
+            }
+        }
+        // The check means something only if both answers occur often.
+        assert!(hits > cases / 50 && hits < cases / 2, "{hits} hits of {cases}");
     }
 }

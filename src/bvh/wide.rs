@@ -159,10 +159,17 @@ impl WidePre {
 /// leaf: most rays of a mesh that does not fill the view reach none, and
 /// keeping it out of the traversal's entry keeps the compiler from computing
 /// it ahead for every ray.
-#[cold]
-#[inline(never)]
-fn shear(dir: Vec3) -> WatertightRay {
-    WatertightRay::new(dir)
+///
+/// Tests other than the watertight one take no shear: for them this is
+/// [`WatertightRay::UNUSED`], made in line.
+#[inline(always)]
+fn shear<K: TriangleKernel>(dir: Vec3) -> WatertightRay {
+    #[cold]
+    #[inline(never)]
+    fn made(dir: Vec3) -> WatertightRay {
+        WatertightRay::new(dir)
+    }
+    if K::WATERTIGHT { made(dir) } else { WatertightRay::UNUSED }
 }
 
 /// Scalar 8-lane box test: hit mask and entry distances (the arithmetic of
@@ -343,7 +350,7 @@ macro_rules! closest {
             } else if {
                 let n = cur.count & !ENTRY_LEAF;
                 $counts.leaf(cur.child, n);
-                let wr = wr.get_or_insert_with(|| shear($ray.dir));
+                let wr = wr.get_or_insert_with(|| shear::<$k>($ray.dir));
                 if cur.count & ENTRY_LEAF != 0 {
                     $self.prims.intersect_leaf::<$k>(cur.child, n, &mut r, wr, &mut best)
                 } else {
@@ -421,7 +428,7 @@ macro_rules! any_hit {
                 if count > 0 {
                     let n = count & !ENTRY_LEAF;
                     $counts.leaf(node.child[l], n);
-                    let wr = wr.get_or_insert_with(|| shear($ray.dir));
+                    let wr = wr.get_or_insert_with(|| shear::<$k>($ray.dir));
                     let hit = if count & ENTRY_LEAF != 0 {
                         $self.prims.occluded_leaf::<$k>(node.child[l], n, $ray, wr)
                     } else {
@@ -839,7 +846,7 @@ impl WideBvh {
     }
 
     /// Closest-hit test of the triangle leaf of `count` triangles from packet
-    /// `first`: SSE packets for the watertight test when `simd`, the
+    /// `first`: SSE packets (four triangles at once) when `simd`, the
     /// per-triangle loop otherwise (same results).
     #[inline(always)]
     pub(super) fn packets_closest<K: TriangleKernel>(
@@ -854,8 +861,11 @@ impl WideBvh {
         // SAFETY of the unwrap's absence: triangle leaves exist only when packets were built.
         let Some(pk) = &self.packets else { return false };
         #[cfg(target_arch = "x86_64")]
-        if simd && K::WATERTIGHT {
-            return pk.intersect_leaf_simd(first, count, ray, wr, best);
+        if simd {
+            return match K::TEST {
+                TriangleTest::Watertight => pk.intersect_leaf_simd(first, count, ray, wr, best),
+                TriangleTest::MollerTrumbore => pk.intersect_leaf_simd_mt(first, count, ray, best),
+            };
         }
         let _ = simd;
         pk.intersect_leaf_scalar::<K>(first, count, ray, wr, best)
@@ -873,8 +883,11 @@ impl WideBvh {
     ) -> bool {
         let Some(pk) = &self.packets else { return false };
         #[cfg(target_arch = "x86_64")]
-        if simd && K::WATERTIGHT {
-            return pk.occluded_leaf_simd(first, count, ray, wr);
+        if simd {
+            return match K::TEST {
+                TriangleTest::Watertight => pk.occluded_leaf_simd(first, count, ray, wr),
+                TriangleTest::MollerTrumbore => pk.occluded_leaf_simd_mt(first, count, ray),
+            };
         }
         let _ = simd;
         pk.occluded_leaf_scalar::<K>(first, count, ray, wr)

@@ -4,6 +4,8 @@
 use std::path::PathBuf;
 
 use crate::backends::{Builder, Traversal};
+use crate::cli::render::parse_triangle_test;
+use crate::geometry::TriangleTest;
 use crate::error::{Error, Result};
 use crate::limits;
 use crate::perf::bench::{BenchOptions, BenchReport, LIGHT};
@@ -63,6 +65,10 @@ pub struct BenchArgs {
     /// With `--race`: skip the meshes (only the renders).
     #[arg(long)]
     pub renders_only: bool,
+    /// With `--race`: rtdiff's triangle test (`watertight`, the default, or
+    /// `moller-trumbore`: not watertight, like Embree's default mode).
+    #[arg(long, default_value = "watertight", value_parser = parse_triangle_test)]
+    pub triangle_test: TriangleTest,
     /// Also write the race's typed report as JSON to this file.
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
@@ -131,7 +137,12 @@ fn race(args: &BenchArgs, rounds: usize) -> Result<()> {
         } else {
             args.scenes.clone()
         };
-        let ropts = RaceOptions { rounds, threads: args.threads.clone(), batches: true };
+        let ropts = RaceOptions {
+            rounds,
+            threads: args.threads.clone(),
+            batches: true,
+            triangle_test: args.triangle_test,
+        };
         for s in &files {
             let prims = crate::rays::load_primitives(s, true)?;
             eprintln!("racing {} ...", s.display());
@@ -222,8 +233,8 @@ pub fn print_bench(r: &BenchReport) {
 /// Print one mesh's race: one line per thread count, workload and Embree mode.
 pub fn print_mesh_race(m: &MeshRace, rounds: usize) {
     println!(
-        "\n## {} ({} primitives; rtdiff tree {:.1} bytes per primitive): rtdiff bvh-sah/fast against Embree, {rounds} interleaved rounds",
-        m.mesh, m.primitives, m.rtdiff_bytes_per_primitive
+        "\n## {} ({} primitives; rtdiff tree {:.1} bytes per primitive): rtdiff {} against Embree, {rounds} interleaved rounds",
+        m.mesh, m.primitives, m.rtdiff_bytes_per_primitive, m.rtdiff
     );
     println!(
         "ratio = Embree time / rtdiff time in the same round (above 1: rtdiff faster); 1 thread: CPU time, more: wall clock"

@@ -82,7 +82,7 @@ impl SceneFlags {
     }
 }
 
-fn parse_triangle_test(s: &str) -> std::result::Result<TriangleTest, String> {
+pub(crate) fn parse_triangle_test(s: &str) -> std::result::Result<TriangleTest, String> {
     s.parse()
 }
 

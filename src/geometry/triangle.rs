@@ -117,6 +117,9 @@ pub struct WatertightRay {
 }
 
 impl WatertightRay {
+    /// A stand-in for tests that take no shear (Moller-Trumbore ignores it).
+    pub const UNUSED: Self = Self { k: [0, 1, 2], s: Vec3::ZERO };
+
     /// Precompute the shear for `dir` (must not be the zero vector).
     #[inline]
     pub fn new(dir: Vec3) -> Self {

@@ -97,6 +97,8 @@ pub struct MeshRace {
     pub mesh: String,
     /// Primitives in it.
     pub primitives: usize,
+    /// rtdiff's tracer (`Tracer::name`: `bvh-sah/fast`, with ` mt` for the Moller-Trumbore test).
+    pub rtdiff: String,
     /// Bytes of rtdiff's tree (nodes and leaf packets) per primitive.
     pub rtdiff_bytes_per_primitive: f64,
     /// Every contest, by thread count, workload and opponent.
@@ -114,6 +116,10 @@ pub struct RaceOptions {
     pub threads: Vec<usize>,
     /// Also race the batch calls (`intersect_batch` / `occluded_batch`).
     pub batches: bool,
+    /// rtdiff's triangle test: watertight (the default, like for like with
+    /// Embree's robust mode) or Moller-Trumbore (like for like with its
+    /// default mode: neither is watertight).
+    pub triangle_test: crate::geometry::TriangleTest,
 }
 
 /// [`race_mesh`] on the benchmark's ray sets of `prims` ([`super::bench::RaySets`]:
@@ -188,11 +194,12 @@ pub fn race_mesh(
     if opts.rounds == 0 {
         return Err(crate::Error::Invalid("--race needs at least one round".into()));
     }
-    let cfg = AccelConfig::default();
+    let cfg = AccelConfig { triangle_test: opts.triangle_test, ..AccelConfig::default() };
     let loads = workloads(sets, opts.batches);
     let mut contests = Vec::new();
     let mut hit_count_differences = Vec::new();
     let mut bytes = 0.0;
+    let mut rtdiff = String::new();
     for &threads in &opts.threads {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -213,6 +220,7 @@ pub fn race_mesh(
             }
         };
         let ours = pool.install(|| build_tracer(prims.clone(), &cfg))?;
+        rtdiff = ours.name();
         if let Some(w) = pool.install(|| crate::bvh::BvhTracer::new(prims, &cfg)).wide() {
             bytes = w.bytes() as f64 / prims.len().max(1) as f64;
         }
@@ -301,6 +309,7 @@ pub fn race_mesh(
     Ok(MeshRace {
         mesh: mesh.to_string(),
         primitives: prims.len(),
+        rtdiff,
         rtdiff_bytes_per_primitive: bytes,
         contests,
         hit_count_differences,
