@@ -370,6 +370,10 @@ fn count_flags_have_limits_named_in_errors_and_help() {
         assert_eq!(code, 2, "{args:?}: {err}");
         assert!(err.contains(needle), "{args:?}: {err}");
     }
+    // A race-only option without `--race` is refused, not ignored.
+    let (code, err) = rtdiff_cmd(&["bench", s, "--triangle-test", "moller-trumbore"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("--triangle-test applies to --race only"), "{err}");
     let (code, err) = rtdiff_cmd(&["render", "--help"]);
     let _ = err;
     assert_eq!(code, 0);

@@ -376,8 +376,11 @@ fn tri4_mt_sse(p: &Tri4, ray: &Ray) -> (u32, [f32; PW], [f32; PW], [f32; PW]) {
         let det_ok = _mm_and_ps(_mm_cmpgt_ps(abs_det, zero), _mm_cmplt_ps(abs_det, _mm_set1_ps(f32::INFINITY)));
         let inv_det = _mm_div_ps(one, det);
         // tv = origin - v0.
-        let (tvx, tvy, tvz) =
-            (_mm_sub_ps(_mm_set1_ps(o[0]), v0x), _mm_sub_ps(_mm_set1_ps(o[1]), v0y), _mm_sub_ps(_mm_set1_ps(o[2]), v0z));
+        let (tvx, tvy, tvz) = (
+            _mm_sub_ps(_mm_set1_ps(o[0]), v0x),
+            _mm_sub_ps(_mm_set1_ps(o[1]), v0y),
+            _mm_sub_ps(_mm_set1_ps(o[2]), v0z),
+        );
         let u = _mm_mul_ps(dot(tvx, tvy, tvz, px, py, pz), inv_det);
         // `(0.0..=1.0).contains(&u)`: ordered comparisons, a NaN fails.
         let ok = _mm_and_ps(det_ok, _mm_and_ps(_mm_cmpge_ps(u, zero), _mm_cmple_ps(u, one)));

@@ -20,7 +20,11 @@
 //! mode is only watertight along edges and its default mode is neither
 //! (docs/embree.md, finding 1), so rtdiff against `embree-*` (robust) is the
 //! like-for-like comparison; against `embree-*-default` rtdiff does more
-//! work per triangle than its opponent.
+//! work per triangle than its opponent. With
+//! [`RaceOptions::triangle_test`] set to Moller-Trumbore (`rtdiff bench
+//! --race N --triangle-test moller-trumbore`) rtdiff uses a test that is
+//! not watertight either, which makes `embree-*-default` the like-for-like
+//! opponent.
 
 use std::sync::Arc;
 
