@@ -418,8 +418,8 @@ mod tests {
     use crate::geometry::triangle::intersect_moller_trumbore;
     use crate::rng::Pcg32;
 
-    /// A float that is often special: 0, -0, tiny, huge, infinite, NaN, or a
-    /// coordinate near the others (shared vertices, grazing rays).
+    /// A coordinate that is now and then special (0, -0, subnormal, huge,
+    /// infinite, NaN or 1) and otherwise uniform in [-1, 1).
     fn coord(rng: &mut Pcg32) -> f32 {
         match rng.below(48) {
             0 => 0.0,
