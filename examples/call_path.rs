@@ -10,7 +10,7 @@
 //! (N rays, traced REPEAT times when a fifth argument is given), `build-cold` (N
 //! builds, each timed after builds by the other tracer, Embree on a device
 //! with the pool's thread count as in the race; `--features embree`; the
-//! median is printed), or `build` (N builds, counted by `--toggle-collect=call_path::build_all`), and TRACER one of `native`, `embree`, `embree-default` (MEDIUM quality).
+//! median is printed), or `build` (N builds, counted by `--toggle-collect=call_path::build_all`), and TRACER one of `native`, `native-mt` (the Moller-Trumbore test), `embree`, `embree-default` (MEDIUM quality).
 
 use std::path::Path;
 
@@ -91,12 +91,11 @@ fn main() -> rtdiff::Result<()> {
         let embree_build = |_: EmbreeQuality, _: EmbreeMode| -> rtdiff::Result<()> {
             Err(rtdiff::Error::Invalid("build-cold needs --features embree".into()))
         };
+        let timing_native = cfg.backend == Backend::Native;
         let other_build = || -> rtdiff::Result<()> {
-            if which == "native" {
-                for q in [EmbreeQuality::Medium, EmbreeQuality::High] {
-                    for m in [EmbreeMode::Robust, EmbreeMode::Default] {
-                        embree_build(q, m)?;
-                    }
+            if timing_native {
+                for (q, m) in rtdiff::perf::race::EMBREE_MODES {
+                    embree_build(q, m)?;
                 }
             } else {
                 std::hint::black_box(build_tracer(prims.clone(), &native)?);
@@ -104,9 +103,10 @@ fn main() -> rtdiff::Result<()> {
             Ok(())
         };
         let timed_build = || -> rtdiff::Result<()> {
-            match which {
-                "native" => build_tracer(prims.clone(), &cfg).map(|_| ()),
-                _ => embree_build(cfg.embree_quality, cfg.embree_mode),
+            if timing_native {
+                build_tracer(prims.clone(), &cfg).map(|_| ())
+            } else {
+                embree_build(cfg.embree_quality, cfg.embree_mode)
             }
         };
         let (mut cpu, mut wall) = (Vec::with_capacity(n), Vec::with_capacity(n));
