@@ -397,9 +397,6 @@ macro_rules! any_hit {
             let node = &nodes[index as usize];
             $counts.node(index);
             let (mut mask, near) = $box8!(node, &q, cull);
-            if $pf {
-                $self.prefetch_children(node, mask);
-            }
             // The nearest of the entered inner nodes is stacked first, so it
             // is searched last: a shadow ray leaves a surface, whose own
             // subtree is the nearest and cannot occlude it. (Same answers in
@@ -419,6 +416,9 @@ macro_rules! any_hit {
                 }
                 stack[sp] = MaybeUninit::new(node.child[first]);
                 sp += 1;
+                if $pf {
+                    $self.prefetch_node(node.child[first]);
+                }
                 mask &= !(1 << first);
             }
             while mask != 0 {
@@ -440,6 +440,9 @@ macro_rules! any_hit {
                 } else {
                     stack[sp] = MaybeUninit::new(node.child[l]);
                     sp += 1;
+                    if $pf {
+                        $self.prefetch_node(node.child[l]);
+                    }
                 }
             }
         }
@@ -552,7 +555,8 @@ pub struct WideBvh {
     levels: usize,
     /// The tree outgrows a core's L2 cache ([`PREFETCH_ALL_BYTES`]): every
     /// walk (closest and any hit, single rays and packets) prefetches its hit
-    /// children. The AVX2 walks take it as a const parameter (`P`, chosen
+    /// children (the any-hit walks only the inner ones, see
+    /// [`WideBvh::prefetch_node`]). The AVX2 walks take it as a const parameter (`P`, chosen
     /// once in [`WideBvh::kernels`]), so a small tree's walks have no prefetch
     /// code at all.
     pub(super) prefetch_all: bool,
@@ -794,6 +798,27 @@ impl WideBvh {
         self.any_portable_impl::<K, C, STACK>(ray, counts)
     }
 
+    /// Ask the cache for the four lines of node `c`: the any-hit walks
+    /// prefetch the inner nodes they stack, not their hit leaves, which they
+    /// test at once (dragon_87k shadow rays against Embree's default mode:
+    /// 0.88 -> 0.92, median of six alternated races each).
+    #[inline(always)]
+    pub(super) fn prefetch_node(&self, c: u32) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+            // A node: 256 bytes at a 64-byte boundary, exactly four lines.
+            let p = self.nodes.as_ptr().wrapping_add(c as usize).cast::<i8>();
+            // SAFETY: prefetching is a hint and never faults, whatever the address.
+            unsafe {
+                _mm_prefetch::<_MM_HINT_T0>(p);
+                _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(64));
+                _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(128));
+                _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(192));
+            }
+        }
+    }
+
     /// Ask the cache for the nodes and leaf primitives of the children in
     /// `mask`: all but the nearest are visited later, and their memory latency
     /// (the traversal's main cost) then overlaps with the work in between.
@@ -808,12 +833,7 @@ impl WideBvh {
             // SAFETY (all prefetches below): prefetching is a hint and never faults, whatever the address.
             let line = |p: *const i8| unsafe { _mm_prefetch::<_MM_HINT_T0>(p) };
             if n == 0 {
-                // A node: 256 bytes at a 64-byte boundary, exactly four lines.
-                let p = self.nodes.as_ptr().wrapping_add(c).cast::<i8>();
-                line(p);
-                line(p.wrapping_add(64));
-                line(p.wrapping_add(128));
-                line(p.wrapping_add(192));
+                self.prefetch_node(c as u32);
                 continue;
             }
             let (p, bytes) = if n & ENTRY_LEAF == 0

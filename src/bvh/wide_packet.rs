@@ -697,7 +697,7 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool>(
                 ni += 1;
                 if P {
                     // Searched after this node's leaves.
-                    bvh.prefetch_children(node, 1 << l);
+                    bvh.prefetch_node(node.child[l]);
                 }
                 continue;
             }
