@@ -817,6 +817,8 @@ impl WideBvh {
                 _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(192));
             }
         }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = c;
     }
 
     /// Ask the cache for the nodes and leaf primitives of the children in
