@@ -564,7 +564,7 @@ pub struct WideBvh {
 
 /// Trees larger than this (a core's L2 cache on current x86 CPUs is 0.5-2
 /// MiB) fetch most nodes from L3 or memory, and every walk prefetches each hit
-/// child. Measured with `rtdiff bench --race` (one binary, the choice read
+/// child (the any-hit walks each inner one: `WideBvh::prefetch_node`). Measured with `rtdiff bench --race` (one binary, the choice read
 /// from an environment variable for the measurement only): dragon_full (48
 /// MB) shadow rays +7%, batch shadow +9%, batch primary +3%; dragon_87k (4.8
 /// MB) no change; suzanne (51 KiB) shadow rays 3-4% slower with the
