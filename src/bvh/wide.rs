@@ -556,16 +556,17 @@ pub struct WideBvh {
     /// The tree outgrows a core's L2 cache ([`PREFETCH_ALL_BYTES`]): every
     /// walk (closest and any hit, single rays and packets) prefetches its hit
     /// children (the any-hit walks only the inner ones, see
-    /// [`WideBvh::prefetch_node`]). The AVX2 walks take it as a const parameter (`P`, chosen
-    /// once in [`WideBvh::kernels`]), so a small tree's walks have no prefetch
-    /// code at all.
+    /// [`WideBvh::prefetch_node`]). The AVX2 walks take it as a const
+    /// parameter (`P`, chosen once in [`WideBvh::kernels`]), so a small
+    /// tree's walks have no prefetch code at all.
     pub(super) prefetch_all: bool,
 }
 
 /// Trees larger than this (a core's L2 cache on current x86 CPUs is 0.5-2
 /// MiB) fetch most nodes from L3 or memory, and every walk prefetches each hit
-/// child (the any-hit walks each inner one: `WideBvh::prefetch_node`). Measured with `rtdiff bench --race` (one binary, the choice read
-/// from an environment variable for the measurement only): dragon_full (48
+/// child (the any-hit walks each inner one: `WideBvh::prefetch_node`).
+/// Measured with `rtdiff bench --race` (one binary, the choice read from an
+/// environment variable for the measurement only): dragon_full (48
 /// MB) shadow rays +7%, batch shadow +9%, batch primary +3%; dragon_87k (4.8
 /// MB) no change; suzanne (51 KiB) shadow rays 3-4% slower with the
 /// prefetches (more instructions, nothing to hide), and primary rays 3%

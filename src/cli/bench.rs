@@ -318,7 +318,7 @@ pub fn print_goals(meshes: &[MeshRace], renders: &[SceneRace]) {
             .min_by(|a, b| a.0.total_cmp(&b.0))
     };
     println!("\n## Goals (worst median ratio among the contests each covers)");
-    if let Some(m) = meshes.iter().find(|m| m.rtdiff.ends_with(TriangleTest::MollerTrumbore.label_suffix())) {
+    if let Some(m) = meshes.iter().find(|m| m.triangle_test == TriangleTest::MollerTrumbore) {
         println!(
             "rtdiff ran as {} (Moller-Trumbore, not watertight, like Embree's default mode): the lines against \
              Embree's default mode compare like for like, those against its robust mode do not",

@@ -103,6 +103,8 @@ pub struct MeshRace {
     pub primitives: usize,
     /// rtdiff's tracer (`Tracer::name`: `bvh-sah/fast`, with ` mt` for the Moller-Trumbore test).
     pub rtdiff: String,
+    /// rtdiff's triangle test ([`RaceOptions::triangle_test`]).
+    pub triangle_test: crate::geometry::TriangleTest,
     /// Bytes of rtdiff's tree (nodes and leaf packets) per primitive.
     pub rtdiff_bytes_per_primitive: f64,
     /// Every contest, by thread count, workload and opponent.
@@ -314,6 +316,7 @@ pub fn race_mesh(
         mesh: mesh.to_string(),
         primitives: prims.len(),
         rtdiff,
+        triangle_test: opts.triangle_test,
         rtdiff_bytes_per_primitive: bytes,
         contests,
         hit_count_differences,
