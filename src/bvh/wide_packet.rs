@@ -638,18 +638,25 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool>(
     // Rays still looking for an occluder.
     let mut open = if n == PACKET { 0xff } else { (1u32 << n) - 1 };
     let all = open;
-    // Only inner nodes are stacked, with the rays that entered them.
+    // Only inner nodes are stacked, with the rays that entered them; the one
+    // visited next is kept in `cur` instead of being stacked and popped at
+    // once (that store and load lengthened the walk's chain of dependent
+    // loads, as in the single-ray walk).
     let mut stack = [MaybeUninit::<(u32, u32)>::uninit(); S];
-    stack[0] = MaybeUninit::new((0, open));
-    let mut sp = 1usize;
+    let mut sp = 0usize;
+    let mut cur = (0u32, open);
     let bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
     let inf = _mm256_set1_ps(f32::INFINITY);
-    while sp > 0 {
-        sp -= 1;
-        // SAFETY: entries below sp were written before.
-        let (index, entered) = unsafe { stack[sp].assume_init() };
+    loop {
+        let (index, entered) = cur;
         let m0 = entered & open;
         if m0 == 0 {
+            if sp == 0 {
+                break;
+            }
+            sp -= 1;
+            // SAFETY: entries below sp were written before.
+            cur = unsafe { stack[sp].assume_init() };
             continue;
         }
         if m0.count_ones() <= SINGLE_RAYS_ANY {
@@ -663,9 +670,12 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool>(
                     open &= !(1 << i);
                 }
             }
-            if open == 0 {
+            if open == 0 || sp == 0 {
                 break;
             }
+            sp -= 1;
+            // SAFETY: entries below sp were written before.
+            cur = unsafe { stack[sp].assume_init() };
             continue;
         }
         let node = &bvh.nodes[index as usize];
@@ -761,15 +771,34 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool>(
             break;
         }
         if ni > 0 {
-            let (c, m, _) = inner[nearest];
-            stack[sp] = MaybeUninit::new((c, m));
-            sp += 1;
+            // Stacked in this order: the nearest, then the others in lane
+            // order; the last of them is visited next instead.
+            let next = if ni == 1 {
+                0
+            } else if nearest == ni - 1 {
+                ni - 2
+            } else {
+                ni - 1
+            };
+            if next != nearest {
+                let (c, m, _) = inner[nearest];
+                stack[sp] = MaybeUninit::new((c, m));
+                sp += 1;
+            }
             for (j, &(c, m, _)) in inner[..ni].iter().enumerate() {
-                if j != nearest {
+                if j != nearest && j != next {
                     stack[sp] = MaybeUninit::new((c, m));
                     sp += 1;
                 }
             }
+            let (c, m, _) = inner[next];
+            cur = (c, m);
+        } else if sp > 0 {
+            sp -= 1;
+            // SAFETY: entries below sp were written before.
+            cur = unsafe { stack[sp].assume_init() };
+        } else {
+            break;
         }
     }
     for (i, o) in out.iter_mut().enumerate() {
