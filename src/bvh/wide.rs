@@ -377,11 +377,9 @@ macro_rules! closest {
     }};
 }
 
-/// Any-hit traversal, generic over the box test (any order gives the same
-/// answer); `$nearest_last`: whether the nearest entered inner node is
-/// searched last ([`WideBvh::nearest_last`]).
+/// Any-hit traversal, generic over the box test (any order gives the same answer).
 macro_rules! any_hit {
-    ($self:ident, $ray:ident, $start:expr, $k:ty, $pre:ident, $box8:ident, $simd:expr, $counts:expr, $stack:expr, $pf:expr, $nearest_last:expr) => {{
+    ($self:ident, $ray:ident, $start:expr, $k:ty, $pre:ident, $box8:ident, $simd:expr, $counts:expr, $stack:expr, $pf:expr) => {{
         let pre = WidePre::new($ray);
         let q = $pre!(&pre);
         let mut wr: Option<WatertightRay> = None;
@@ -402,17 +400,13 @@ macro_rules! any_hit {
             let node = &nodes[cur as usize];
             $counts.node(cur);
             let (mut mask, near) = $box8!(node, &q, cull);
-            // In large trees the nearest of the entered inner nodes is
-            // stacked first, so it is searched last: a shadow ray leaves a
-            // surface, whose own subtree is the nearest and cannot occlude
-            // it. (Same answers in any order; fewer nodes and leaves per
-            // shadow ray for lights on every side,
-            // `examples/traversal_counts.rs`.) Elsewhere the choice costs
-            // more than the visits it saves (`NEAREST_LAST_BYTES`), and the
-            // entered children are searched from the last lane down.
+            // The nearest of the entered inner nodes is stacked first, so it
+            // is searched last: a shadow ray leaves a surface, whose own
+            // subtree is the nearest and cannot occlude it. (Same answers in
+            // any order; fewer nodes and leaves per shadow ray for lights on
+            // every side, `examples/traversal_counts.rs`.)
             // (A node that one child or none is entered in needs no choice.)
-            let mut inner =
-                if $nearest_last && mask & mask.wrapping_sub(1) != 0 { mask & node.inner_lanes() } else { 0 };
+            let mut inner = if mask & mask.wrapping_sub(1) != 0 { mask & node.inner_lanes() } else { 0 };
             if inner & inner.wrapping_sub(1) != 0 {
                 let mut first = inner.trailing_zeros() as usize;
                 inner &= inner - 1;
@@ -584,11 +578,6 @@ pub struct WideBvh {
     /// parameter (`P`, chosen once in [`WideBvh::kernels`]), so a small
     /// tree's walks have no prefetch code at all.
     pub(super) prefetch_all: bool,
-    /// The tree outgrows a last-level cache ([`NEAREST_LAST_BYTES`]): the
-    /// single-ray any-hit walk searches the nearest entered inner node of
-    /// each node last. A const parameter of the AVX2 walks, like
-    /// `prefetch_all`.
-    pub(super) nearest_last: bool,
 }
 
 /// Trees larger than this (a core's L2 cache on current x86 CPUs is 0.5-2
@@ -602,23 +591,6 @@ pub struct WideBvh {
 /// slower with the closest-hit walk's (which prefetched in every tree until
 /// stop 25: 7% of the instructions of suzanne's incoherent rays).
 pub const PREFETCH_ALL_BYTES: usize = 2 << 20;
-
-/// Trees larger than this (a last-level cache of current x86 CPUs is 8-32
-/// MiB) make the single-ray any-hit walk search the nearest entered inner
-/// node of each node last ([`WideBvh::nearest_last`]): a shadow ray's own
-/// surface lies in that subtree, and in a tree that does not fit the cache
-/// the node visits this saves cost more than the choice. In smaller trees the
-/// choice (the inner lanes' mask, a search for the nearest) costs more than
-/// it saves. Measured with `rtdiff bench --race 3 --threads 1` (shadow rays
-/// against Embree's default mode, one binary, the choice read from an
-/// environment variable for the measurement only, three alternated pairs
-/// each, with / without the choice): suzanne (51 KiB) 0.997 / 1.022, 0.944 /
-/// 0.998, 0.997 / 1.012; dragon_87k (4.8 MB) 0.940 / 0.968, 0.942 / 0.955,
-/// 0.931 / 0.964; dragon_res2 (11 MB) 0.978 / 0.988, 0.941 / 0.994, 0.983 /
-/// 0.989; dragon_full (48 MB) 0.926 / 0.895, 0.919 / 0.896, 0.918 / 0.885.
-/// The packet walk (`wide_packet::any8`) keeps its choice in every tree
-/// (without it dragon_87k's batch shadow rays were 3% slower).
-pub const NEAREST_LAST_BYTES: usize = 16 << 20;
 
 impl WideBvh {
     /// Collapse `bvh` into 8-wide nodes (see [`super::collapse`]).
@@ -716,17 +688,8 @@ impl WideBvh {
     /// The tree of `nodes` over `prims` and `packets`, with its depth, the
     /// CPU's instruction set and the prefetch choice.
     fn finish(nodes: Vec<WideNode>, prims: LeafPrims, packets: Option<TriPackets>) -> Self {
-        let mut bvh = Self {
-            levels: levels(&nodes),
-            nodes,
-            prims,
-            packets,
-            isa: detect_isa(),
-            prefetch_all: false,
-            nearest_last: false,
-        };
+        let mut bvh = Self { levels: levels(&nodes), nodes, prims, packets, isa: detect_isa(), prefetch_all: false };
         bvh.prefetch_all = bvh.bytes() > PREFETCH_ALL_BYTES;
-        bvh.nearest_last = bvh.bytes() > NEAREST_LAST_BYTES;
         bvh
     }
 
@@ -758,26 +721,21 @@ impl WideBvh {
         let shallow = self.levels * (WIDTH - 1) <= SHALLOW_STACK;
         #[cfg(target_arch = "x86_64")]
         if self.isa == Isa::Avx2 {
-            /// The AVX2 entry points with stack size `S`, the prefetch choice
-            /// `P` and the any-hit walk's nearest-last choice `N`.
-            fn avx2<K: TriangleKernel, const S: usize, const P: bool, const N: bool>() -> Kernels {
+            /// The AVX2 entry points with stack size `S` and the prefetch choice `P`.
+            fn avx2<K: TriangleKernel, const S: usize, const P: bool>() -> Kernels {
                 use super::wide_packet::{any8, closest8};
                 Kernels {
                     closest: closest_avx2::<K, S, P>,
-                    any: any_avx2::<K, S, P, N>,
+                    any: any_avx2::<K, S, P>,
                     closest8: closest8::<K, S, P>,
-                    any8: any8::<K, S, P, N>,
+                    any8: any8::<K, S, P>,
                 }
             }
-            // A tree over NEAREST_LAST_BYTES is also over PREFETCH_ALL_BYTES:
-            // three combinations of the two choices, no fourth to compile.
-            return match (shallow, self.prefetch_all, self.nearest_last) {
-                (true, false, _) => avx2::<K, SHALLOW_STACK, false, false>(),
-                (true, true, false) => avx2::<K, SHALLOW_STACK, true, false>(),
-                (true, true, true) => avx2::<K, SHALLOW_STACK, true, true>(),
-                (false, false, _) => avx2::<K, STACK, false, false>(),
-                (false, true, false) => avx2::<K, STACK, true, false>(),
-                (false, true, true) => avx2::<K, STACK, true, true>(),
+            return match (shallow, self.prefetch_all) {
+                (true, false) => avx2::<K, SHALLOW_STACK, false>(),
+                (true, true) => avx2::<K, SHALLOW_STACK, true>(),
+                (false, false) => avx2::<K, STACK, false>(),
+                (false, true) => avx2::<K, STACK, true>(),
             };
         }
         let (closest, any): (ClosestFn, AnyFn) = if shallow {
@@ -849,10 +807,10 @@ impl WideBvh {
         if self.isa == Isa::Avx2 {
             // SAFETY: isa is Avx2 only when the CPU reports AVX2.
             return unsafe {
-                match (self.prefetch_all, self.nearest_last) {
-                    (false, _) => self.any_avx2_impl::<K, C, STACK, false, false>(ray, counts),
-                    (true, false) => self.any_avx2_impl::<K, C, STACK, true, false>(ray, counts),
-                    (true, true) => self.any_avx2_impl::<K, C, STACK, true, true>(ray, counts),
+                if self.prefetch_all {
+                    self.any_avx2_impl::<K, C, STACK, true>(ray, counts)
+                } else {
+                    self.any_avx2_impl::<K, C, STACK, false>(ray, counts)
                 }
             };
         }
@@ -988,7 +946,7 @@ impl WideBvh {
 
     #[inline(always)]
     fn any_portable_impl<K: TriangleKernel, C: Count, const S: usize>(&self, ray: &Ray, counts: &mut C) -> bool {
-        any_hit!(self, ray, 0, K, portable_pre, box8_portable, false, counts, S, self.prefetch_all, self.nearest_last)
+        any_hit!(self, ray, 0, K, portable_pre, box8_portable, false, counts, S, self.prefetch_all)
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -1016,24 +974,24 @@ impl WideBvh {
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn any_avx2_impl<K: TriangleKernel, C: Count, const S: usize, const P: bool, const N: bool>(
+    fn any_avx2_impl<K: TriangleKernel, C: Count, const S: usize, const P: bool>(
         &self,
         ray: &Ray,
         counts: &mut C,
     ) -> bool {
-        any_hit!(self, ray, 0, K, avx2_pre, box8_avx2, true, counts, S, P, N)
+        any_hit!(self, ray, 0, K, avx2_pre, box8_avx2, true, counts, S, P)
     }
 
     /// The AVX2 any-hit walk of the subtree under node `start` alone (the
     /// packet walk's switch to single rays when few of its rays are left).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    pub(super) fn any_avx2_from<K: TriangleKernel, const S: usize, const P: bool, const N: bool>(
+    pub(super) fn any_avx2_from<K: TriangleKernel, const S: usize, const P: bool>(
         &self,
         ray: &Ray,
         start: u32,
     ) -> bool {
-        any_hit!(self, ray, start, K, avx2_pre, box8_avx2, true, &mut (), S, P, N)
+        any_hit!(self, ray, start, K, avx2_pre, box8_avx2, true, &mut (), S, P)
     }
 }
 
@@ -1065,12 +1023,12 @@ unsafe fn closest_avx2<K: TriangleKernel, const S: usize, const P: bool>(bvh: &W
 
 /// The AVX2 any-hit entry point (only called when the CPU has AVX2).
 #[cfg(target_arch = "x86_64")]
-unsafe fn any_avx2<K: TriangleKernel, const S: usize, const P: bool, const N: bool>(bvh: &WideBvh, ray: &Ray) -> bool {
+unsafe fn any_avx2<K: TriangleKernel, const S: usize, const P: bool>(bvh: &WideBvh, ray: &Ray) -> bool {
     if bvh.nodes.is_empty() {
         return false;
     }
     // SAFETY: the caller guarantees AVX2 (`WideBvh::kernels`).
-    unsafe { bvh.any_avx2_impl::<K, (), S, P, N>(ray, &mut ()) }
+    unsafe { bvh.any_avx2_impl::<K, (), S, P>(ray, &mut ()) }
 }
 
 /// The portable packet entry point: each ray through the single-ray kernel.
@@ -1228,48 +1186,6 @@ mod tests {
             hits += usize::from(a.is_some());
         }
         assert!(hits > 1000, "only {hits} hits: the rays do not exercise the traversal");
-    }
-
-    /// The any-hit walk that searches each node's nearest entered inner node
-    /// last (chosen for trees over `NEAREST_LAST_BYTES`) and the one that
-    /// searches in lane order give the closest-hit walk's answer on the same
-    /// tree, single rays and packets, AVX2 and portable code.
-    #[test]
-    fn nearest_last_and_lane_order_any_hit_agree() {
-        let prims = soup(4000, 9);
-        let lane_order = super::super::build_wide(&prims, &AccelConfig::default());
-        assert!(!lane_order.nearest_last, "a small tree searches in lane order");
-        let mut nearest_last = lane_order.clone();
-        // Both choices a tree over NEAREST_LAST_BYTES has.
-        nearest_last.prefetch_all = true;
-        nearest_last.nearest_last = true;
-        let mut rng = Pcg32::new(11, 0);
-        // Rays of every length: the shorter ones end before most occluders.
-        let rays: Vec<Ray> = crate::rays::incoherent_rays(&prims.world_bounds(), 20_000, 13)
-            .into_iter()
-            .map(|mut r| {
-                r.t_max = 2.0 * rng.next_f32();
-                r
-            })
-            .collect();
-        for mut tree in [lane_order, nearest_last] {
-            for scalar in [false, true] {
-                if scalar {
-                    tree.set_scalar();
-                }
-                let k = tree.kernels(TriangleTest::Watertight);
-                let mut batch = vec![false; rays.len()];
-                k.any_batch(&tree, &rays, &mut batch);
-                let mut occluded = 0;
-                for (r, &b) in rays.iter().zip(&batch) {
-                    let expected = k.closest(&tree, r).is_some();
-                    assert_eq!(k.any(&tree, r), expected, "{r:?}");
-                    assert_eq!(b, expected, "{r:?} in a packet");
-                    occluded += usize::from(expected);
-                }
-                assert!(occluded > 1000 && occluded < 19_000, "{occluded} of 20000 rays occluded: too few either way");
-            }
-        }
     }
 
     /// With spheres among the triangles, triangle-only leaves still use

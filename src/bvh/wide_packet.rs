@@ -622,16 +622,13 @@ const SINGLE_RAYS: u32 = 4;
 /// 0.821.
 const SINGLE_RAYS_ANY: u32 = 3;
 
-/// Occlusion of up to [`PACKET`] rays, answers into `out` (same length);
-/// `N` is the tree's nearest-last choice (`WideBvh::nearest_last`) for the
-/// single-ray walks it hands subtrees to (the packet always stacks its
-/// nearest entered inner node first).
+/// Occlusion of up to [`PACKET`] rays, answers into `out` (same length).
 ///
 /// # Safety
 /// As [`closest8`].
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool, const N: bool>(
+pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool>(
     bvh: &WideBvh,
     rays: &[Ray],
     out: &mut [bool],
@@ -676,7 +673,7 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool, cons
             while m != 0 {
                 let i = m.trailing_zeros() as usize;
                 m &= m - 1;
-                if bvh.any_avx2_from::<K, S, P, N>(&rays[i], index) {
+                if bvh.any_avx2_from::<K, S, P>(&rays[i], index) {
                     open &= !(1 << i);
                 }
             }
