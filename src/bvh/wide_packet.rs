@@ -612,15 +612,8 @@ const SINGLE_RAYS: u32 = 4;
 /// dragon_87k 5.8, dragon_full 3.19 (race 3); from 2 rays 16.0-16.5, 6.0-6.2,
 /// 3.29-3.34; from 1 or 0 rays the same as 2 on suzanne and dragon_87k, and
 /// from 0 dragon_full 3.23-3.25; from 6 or 8 rays slower everywhere (8:
-/// suzanne 9.5). Measured again once small trees' single-ray any-hit walk
-/// searched in lane order (`wide::NEAREST_LAST_BYTES`), which made handing
-/// rays to it cheaper (stop 29, batch shadow rays against Embree's default
-/// mode, `--race 3`, one binary): suzanne from 2 rays 0.850 / 0.861, from 3
-/// 0.902 / 0.896 / 0.910 / 0.874, from 4 0.915 / 0.870 / 0.898 / 0.876,
-/// from 6 0.905 / 0.890; dragon_87k 0.86-0.88 from 2 to 6 rays; dragon_full
-/// (`--race 2`) from 2 0.833 / 0.826, from 3 0.844 / 0.832, from 4 0.828 /
-/// 0.821.
-const SINGLE_RAYS_ANY: u32 = 3;
+/// suzanne 9.5).
+const SINGLE_RAYS_ANY: u32 = 2;
 
 /// Occlusion of up to [`PACKET`] rays, answers into `out` (same length).
 ///
