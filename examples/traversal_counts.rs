@@ -1,8 +1,9 @@
 //! Deterministic traversal work of the `fast` path: wide-node visits, leaf
 //! visits and packet tests per ray, on the `rtdiff bench` primary, incoherent
-//! and shadow rays (closest hit for the first two, any hit for shadow rays),
-//! and on shadow rays towards three more lights (the benchmark's light
-//! mirrored), so that a change of the any-hit order is not tuned to one light. Unlike timings, these counts do not depend on the
+//! and shadow rays (closest hit for the first two, any hit for shadow rays;
+//! the benchmark's shadow rays go to four lights, a quarter of the image
+//! each), and on the shadow rays of the whole image towards each of those
+//! lights, so that a change of the any-hit order is not tuned to one light. Unlike timings, these counts do not depend on the
 //! machine's load, so they compare tree layouts and build parameters exactly.
 //!
 //! `cargo run --release --example traversal_counts -- [mesh.obj] [bins]`
@@ -11,7 +12,7 @@ use rtdiff::backends::{AccelConfig, Builder, build_tracer};
 use rtdiff::bvh::wide::TraversalCounts;
 use rtdiff::geometry::TriangleTest;
 use rtdiff::geometry::offset::SpawnOffset;
-use rtdiff::perf::bench::RaySets;
+use rtdiff::perf::bench::{RaySets, SHADOW_LIGHTS};
 use rtdiff::rays::workload::shadow_rays;
 
 fn main() -> rtdiff::Result<()> {
@@ -26,12 +27,9 @@ fn main() -> rtdiff::Result<()> {
     let reference = build_tracer(prims.clone(), &cfg)?;
     let sets = RaySets::new(&prims, 512, 262_144, reference.as_ref());
     let hits: Vec<_> = sets.primary.iter().map(|r| reference.intersect(r)).collect();
-    let mirrored: Vec<(String, Vec<rtdiff::geometry::Ray>)> = [(1.0, 1.0, 1.0), (1.0, -1.0, -1.0), (-1.0, -1.0, 1.0)]
+    let mirrored: Vec<(String, Vec<rtdiff::geometry::Ray>)> = SHADOW_LIGHTS
         .into_iter()
-        .map(|(x, y, z)| {
-            let light = glam::Vec3::new(x, y, z);
-            (format!("shadow{light}"), shadow_rays(&prims, &sets.primary, &hits, light, SpawnOffset::Robust))
-        })
+        .map(|light| (format!("shadow{light}"), shadow_rays(&prims, &sets.primary, &hits, light, SpawnOffset::Robust)))
         .collect();
     let mut list: Vec<(&str, &[rtdiff::geometry::Ray], bool)> = sets.list().to_vec();
     list.extend(mirrored.iter().map(|(n, r)| (n.as_str(), r.as_slice(), true)));

@@ -8,7 +8,7 @@ use crate::cli::render::parse_triangle_test;
 use crate::error::{Error, Result};
 use crate::geometry::TriangleTest;
 use crate::limits;
-use crate::perf::bench::{BenchOptions, BenchReport, LIGHT};
+use crate::perf::bench::{BenchOptions, BenchReport, SHADOW_LIGHTS};
 use crate::perf::race::{MeshRace, RaceOptions};
 use crate::perf::render_race::{RenderRaceOptions, SceneRace};
 
@@ -195,8 +195,12 @@ pub fn print_bench(r: &BenchReport) {
         println!("embree not built ({e})");
     }
     println!(
-        "\nrays: primary {} ({} hit), incoherent {}, shadow {} (towards {LIGHT})",
-        r.rays.primary, r.rays.primary_hits, r.rays.incoherent, r.rays.shadow
+        "\nrays: primary {} ({} hit), incoherent {}, shadow {} (towards {}, a quarter of the image each)",
+        r.rays.primary,
+        r.rays.primary_hits,
+        r.rays.incoherent,
+        r.rays.shadow,
+        SHADOW_LIGHTS.map(|l| l.to_string()).join(", ")
     );
     for t in &r.traversal {
         println!(
