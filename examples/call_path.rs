@@ -5,7 +5,8 @@
 //! --toggle-collect=call_path::trace_all` counts only the tracing.
 //!
 //! `cargo run --release [--features embree] --example call_path -- MESH SET N TRACER [REPEAT]`
-//! with SET one of `primary`, `incoherent`, `shadow`, `batch-primary`, `batch-shadow`, `miss` (rays
+//! with SET one of `primary`, `incoherent`, `shadow`, `batch-primary`, `batch-shadow` (`shadow@K`,
+//! `batch-shadow@K`: the whole image's shadow rays towards light K of `SHADOW_LIGHTS` alone), `miss` (rays
 //! that leave the mesh's bounds: the per-call cost alone)
 //! (N rays, traced REPEAT times when a fifth argument is given), `build-cold` (N
 //! builds, each timed after builds by the other tracer, Embree on a device
@@ -16,8 +17,10 @@ use std::path::Path;
 
 use rtdiff::accel::Tracer;
 use rtdiff::backends::{AccelConfig, Backend, Builder, EmbreeMode, EmbreeQuality, Traversal, build_tracer};
+use rtdiff::geometry::offset::SpawnOffset;
 use rtdiff::geometry::{Hit, Ray};
-use rtdiff::perf::bench::RaySets;
+use rtdiff::perf::bench::{RaySets, SHADOW_LIGHTS};
+use rtdiff::rays::workload::shadow_rays;
 
 /// `n` builds of `prims` through `build_tracer` (profile with
 /// `--toggle-collect=call_path::build_all`).
@@ -147,12 +150,36 @@ fn main() -> rtdiff::Result<()> {
             Ray::new(centre + far * d, d)
         })
         .collect();
+    // `shadow@K` / `batch-shadow@K`: the whole image's shadow rays towards
+    // light K of `SHADOW_LIGHTS` alone (the benchmark's set sends each
+    // quarter of the image to another light).
+    let one_light = set.split_once('@').map(|(s, k)| (s, k.parse::<usize>())).map(|(s, k)| {
+        let k = k.ok().filter(|&k| k < SHADOW_LIGHTS.len());
+        (s, k)
+    });
+    let per_light;
+    let set = match one_light {
+        Some((s, Some(k))) if s == "shadow" || s == "batch-shadow" => {
+            let hits: Vec<_> = sets.primary.iter().map(|r| reference.intersect(r)).collect();
+            per_light = shadow_rays(&prims, &sets.primary, &hits, SHADOW_LIGHTS[k], SpawnOffset::Robust);
+            s
+        }
+        Some(_) => {
+            let n = SHADOW_LIGHTS.len();
+            return Err(rtdiff::Error::Invalid(format!("{set}: expected shadow@K or batch-shadow@K, K below {n}")));
+        }
+        None => {
+            per_light = Vec::new();
+            set
+        }
+    };
+    let shadow = if one_light.is_some() { &per_light } else { &sets.shadow };
     let (base, any, batch) = match set {
         "primary" => (&sets.primary, false, false),
         "incoherent" => (&sets.incoherent, false, false),
-        "shadow" => (&sets.shadow, true, false),
+        "shadow" => (shadow, true, false),
         "batch-primary" => (&sets.primary, false, true),
-        "batch-shadow" => (&sets.shadow, true, true),
+        "batch-shadow" => (shadow, true, true),
         "miss" => (&miss, false, false),
         other => return Err(rtdiff::Error::Invalid(format!("unknown set {other}"))),
     };
