@@ -222,8 +222,24 @@ unsafe fn permuted(
 }
 
 /// Leaves whose triangles are tested against this many of the packet's rays
-/// or more take one triangle against all eight rays at once ([`tri_x8`]).
+/// or more take one triangle against all eight rays at once ([`tri_x8`]), in
+/// the closest-hit packet walk. 4 or 2 measured the same on batch primary rays
+/// (stop 29, `--race 3`, one binary, against Embree's default mode: suzanne
+/// 1.22-1.23 from 6 rays, 1.25-1.26 from 4, 1.22-1.27 from 2; dragon_87k
+/// 0.99-1.00, 0.97-1.00, 1.00).
 const SOA_LEAF_RAYS: u32 = 6;
+
+/// [`SOA_LEAF_RAYS`] for the any-hit packet walk: a leaf that two of the
+/// packet's rays reach already takes one triangle against all eight rays.
+/// Measured on the four-light shadow set (stop 29, `rtdiff bench --race 3
+/// --threads 1`, batch shadow rays against Embree's default mode, one binary,
+/// the value read from an environment variable for the measurement only):
+/// suzanne from 6 rays 0.783 / 0.797, from 4 0.832 / 0.845 / 0.782 / 0.840,
+/// from 3 0.851 / 0.848, from 2 0.866 / 0.879, from 1 0.852 / 0.868, never
+/// (9) 0.595 / 0.592; dragon_87k from 6 1.014 / 1.014, from 2 1.036 / 1.039;
+/// dragon_full (`--race 2`) from 6 1.074 / 1.069 / 1.036 / 1.057, from 2
+/// 1.048 / 1.028.
+const SOA_LEAF_RAYS_ANY: u32 = 2;
 
 /// The watertight test of triangle `(v0, v1, v2)` against the eight rays of
 /// `sh` (rays in the lanes, `t_max` per ray): `(hit mask, uncertain mask, t,
@@ -714,7 +730,7 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool>(
             let c = count & !ENTRY_LEAF;
             if K::WATERTIGHT
                 && count & ENTRY_LEAF == 0
-                && m.count_ones() >= SOA_LEAF_RAYS
+                && m.count_ones() >= SOA_LEAF_RAYS_ANY
                 && let Some(pk) = &bvh.packets
             {
                 let (sh, t_max) = sheared.get_or_insert_with(|| {
