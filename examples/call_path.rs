@@ -153,27 +153,20 @@ fn main() -> rtdiff::Result<()> {
     // `shadow@K` / `batch-shadow@K`: the whole image's shadow rays towards
     // light K of `SHADOW_LIGHTS` alone (the benchmark's set sends each
     // quarter of the image to another light).
-    let one_light = set.split_once('@').map(|(s, k)| (s, k.parse::<usize>())).map(|(s, k)| {
-        let k = k.ok().filter(|&k| k < SHADOW_LIGHTS.len());
-        (s, k)
-    });
-    let per_light;
-    let set = match one_light {
-        Some((s, Some(k))) if s == "shadow" || s == "batch-shadow" => {
+    let per_light: Vec<Ray>;
+    let (set, shadow) = match set.split_once('@') {
+        None => (set, &sets.shadow),
+        Some((s, k)) => {
+            let light = k.parse::<usize>().ok().and_then(|k| SHADOW_LIGHTS.get(k));
+            let (Some(&light), "shadow" | "batch-shadow") = (light, s) else {
+                let n = SHADOW_LIGHTS.len();
+                return Err(rtdiff::Error::Invalid(format!("{set}: expected shadow@K or batch-shadow@K, K below {n}")));
+            };
             let hits: Vec<_> = sets.primary.iter().map(|r| reference.intersect(r)).collect();
-            per_light = shadow_rays(&prims, &sets.primary, &hits, SHADOW_LIGHTS[k], SpawnOffset::Robust);
-            s
-        }
-        Some(_) => {
-            let n = SHADOW_LIGHTS.len();
-            return Err(rtdiff::Error::Invalid(format!("{set}: expected shadow@K or batch-shadow@K, K below {n}")));
-        }
-        None => {
-            per_light = Vec::new();
-            set
+            per_light = shadow_rays(&prims, &sets.primary, &hits, light, SpawnOffset::Robust);
+            (s, &per_light)
         }
     };
-    let shadow = if one_light.is_some() { &per_light } else { &sets.shadow };
     let (base, any, batch) = match set {
         "primary" => (&sets.primary, false, false),
         "incoherent" => (&sets.incoherent, false, false),

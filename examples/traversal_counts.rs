@@ -27,12 +27,12 @@ fn main() -> rtdiff::Result<()> {
     let reference = build_tracer(prims.clone(), &cfg)?;
     let sets = RaySets::new(&prims, 512, 262_144, reference.as_ref());
     let hits: Vec<_> = sets.primary.iter().map(|r| reference.intersect(r)).collect();
-    let mirrored: Vec<(String, Vec<rtdiff::geometry::Ray>)> = SHADOW_LIGHTS
+    let per_light: Vec<(String, Vec<rtdiff::geometry::Ray>)> = SHADOW_LIGHTS
         .into_iter()
         .map(|light| (format!("shadow{light}"), shadow_rays(&prims, &sets.primary, &hits, light, SpawnOffset::Robust)))
         .collect();
     let mut list: Vec<(&str, &[rtdiff::geometry::Ray], bool)> = sets.list().to_vec();
-    list.extend(mirrored.iter().map(|(n, r)| (n.as_str(), r.as_slice(), true)));
+    list.extend(per_light.iter().map(|(n, r)| (n.as_str(), r.as_slice(), true)));
     for (name, rays, any) in list {
         let mut c = TraversalCounts::default();
         for r in rays {
