@@ -167,6 +167,143 @@ macro_rules! regs {
     }};
 }
 
+/// Horizontal minimum of the eight lanes, in every lane.
+#[cfg(target_arch = "x86_64")]
+macro_rules! hmin_all {
+    ($v:expr) => {{
+        use std::arch::x86_64::*;
+        let v = $v;
+        let a = _mm256_min_ps(v, _mm256_permute2f128_ps::<1>(v, v));
+        let b = _mm256_min_ps(a, _mm256_shuffle_ps::<0b01_00_11_10>(a, a));
+        _mm256_min_ps(b, _mm256_shuffle_ps::<0b10_11_00_01>(b, b))
+    }};
+}
+
+/// Horizontal maximum of the eight lanes, in every lane.
+#[cfg(target_arch = "x86_64")]
+macro_rules! hmax_all {
+    ($v:expr) => {{
+        use std::arch::x86_64::*;
+        let v = $v;
+        let a = _mm256_max_ps(v, _mm256_permute2f128_ps::<1>(v, v));
+        let b = _mm256_max_ps(a, _mm256_shuffle_ps::<0b01_00_11_10>(a, a));
+        _mm256_max_ps(b, _mm256_shuffle_ps::<0b10_11_00_01>(b, b))
+    }};
+}
+
+/// A conservative bound of the packet's box tests, for all eight children
+/// of a node at once: the rays' origins and reciprocals as intervals.
+///
+/// Each ray's entry distance on an axis is `fl(fl(b - o) inv)` (the exact
+/// arithmetic of [`lane_box`]). Rounding is monotone, so over origins in
+/// `[o_lo, o_hi]` and reciprocals in `[inv_lo, inv_hi]` (one sign for all the
+/// rays, so each ray's near plane is the same row) that distance is at least
+/// `min(fl(d inv_lo), fl(d inv_hi))` with `d = fl(b - o_hi)` where the
+/// reciprocals are positive (`fl(b - o_lo)` where negative); the exit
+/// distances are bounded above the same way. Every reciprocal is finite and
+/// nonzero, so no product is NaN. A child whose lower entry bound exceeds
+/// its upper exit bound is entered by none of the rays: the packet skips
+/// its eight-ray test, which would find no ray. The bound uses all the
+/// packet's rays and a stale (larger) cull distance, both of which only
+/// widen it.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+struct Frustum {
+    /// Byte offsets in a node of each axis's near and far rows.
+    near: [usize; 3],
+    far: [usize; 3],
+    /// The origin bound that gives the least entry (greatest exit) distance.
+    o_near: [std::arch::x86_64::__m256; 3],
+    o_far: [std::arch::x86_64::__m256; 3],
+    /// Least and greatest reciprocal (and far reciprocal) of each axis.
+    inv: [[std::arch::x86_64::__m256; 2]; 3],
+    inv_far: [[std::arch::x86_64::__m256; 2]; 3],
+    /// Least `t_min` of the rays.
+    t_min: std::arch::x86_64::__m256,
+}
+
+/// The packet's [`Frustum`], when every ray's direction has the same signs
+/// and every reciprocal (and far reciprocal) is finite.
+///
+/// # Safety
+/// The CPU must have AVX2 (inlined into AVX2 functions only).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn frustum(s: &Soa, rows: Option<[usize; 6]>) -> Option<Frustum> {
+    use std::arch::x86_64::*;
+    let rows = rows?;
+    // SAFETY: AVX2 is guaranteed by the caller; every Soa row is 32 bytes at a 32-byte multiple of the aligned Soa.
+    unsafe {
+        let ld = |r: &[f32; PACKET]| _mm256_load_ps(r.as_ptr());
+        let inf = _mm256_set1_ps(f32::INFINITY);
+        let abs = |x: __m256| _mm256_andnot_ps(_mm256_set1_ps(-0.0), x);
+        // Ordered comparisons: a NaN reciprocal is not finite either.
+        let finite = |x: __m256| _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(abs(x), inf)) == 0xff;
+        let inv = [ld(&s.inv[0]), ld(&s.inv[1]), ld(&s.inv[2])];
+        if !inv.iter().all(|&x| finite(x)) {
+            return None;
+        }
+        let fs = _mm256_set1_ps(far_scale());
+        let row = std::mem::size_of::<[f32; WIDTH]>();
+        let mut f = Frustum {
+            near: [0; 3],
+            far: [0; 3],
+            o_near: [inf; 3],
+            o_far: [inf; 3],
+            inv: [[inf; 2]; 3],
+            inv_far: [[inf; 2]; 3],
+            t_min: hmin_all!(ld(&s.t_min)),
+        };
+        for a in 0..3 {
+            let o = ld(&s.o[a]);
+            let (o_lo, o_hi) = (hmin_all!(o), hmax_all!(o));
+            // The near plane is the min row (row a) where the reciprocals are positive.
+            let positive = rows[a] == a;
+            f.near[a] = rows[a] * row;
+            f.far[a] = rows[3 + a] * row;
+            (f.o_near[a], f.o_far[a]) = if positive { (o_hi, o_lo) } else { (o_lo, o_hi) };
+            f.inv[a] = [hmin_all!(inv[a]), hmax_all!(inv[a])];
+            // Each ray's far reciprocal is fl(inv far_scale), monotone in inv:
+            // the least and greatest are those of the least and greatest inv.
+            f.inv_far[a] = [_mm256_mul_ps(f.inv[a][0], fs), _mm256_mul_ps(f.inv[a][1], fs)];
+            if !(finite(f.inv_far[a][0]) && finite(f.inv_far[a][1])) {
+                return None;
+            }
+        }
+        Some(f)
+    }
+}
+
+/// The children of `node` that some ray of the packet may enter (bit `l`
+/// for lane `l`): a superset of the lanes whose [`lane_box`] test finds a
+/// ray, never missing one (see [`Frustum`]). Empty lanes (inverted boxes)
+/// are never in it.
+///
+/// # Safety
+/// The CPU must have AVX2 (inlined into AVX2 functions only).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn frustum_lanes(node: &super::wide::WideNode, f: &Frustum, cull_hi: std::arch::x86_64::__m256) -> u32 {
+    use std::arch::x86_64::*;
+    // SAFETY: AVX2 is guaranteed by the caller.
+    unsafe {
+        let base = node.b.as_ptr().cast::<u8>();
+        // SAFETY: every offset is a row (32 bytes) of the 64-byte aligned node.
+        let ld = |off: usize| _mm256_load_ps(base.add(off).cast::<f32>());
+        let near = |a: usize| {
+            let d = _mm256_sub_ps(ld(f.near[a]), f.o_near[a]);
+            _mm256_min_ps(_mm256_mul_ps(d, f.inv[a][0]), _mm256_mul_ps(d, f.inv[a][1]))
+        };
+        let far = |a: usize| {
+            let d = _mm256_sub_ps(ld(f.far[a]), f.o_far[a]);
+            _mm256_max_ps(_mm256_mul_ps(d, f.inv_far[a][0]), _mm256_mul_ps(d, f.inv_far[a][1]))
+        };
+        let tn = _mm256_max_ps(near(0), _mm256_max_ps(near(1), _mm256_max_ps(near(2), f.t_min)));
+        let tf = _mm256_min_ps(far(0), _mm256_min_ps(far(1), _mm256_min_ps(far(2), cull_hi)));
+        _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32
+    }
+}
+
 /// Horizontal minimum of the eight lanes.
 #[cfg(target_arch = "x86_64")]
 macro_rules! hmin {
@@ -368,6 +505,8 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize, const P: bool>(
     let n = rays.len();
     let mut soa = Soa::new(rays);
     let v = regs!(&soa);
+    // SAFETY: closest8 runs on AVX2 CPUs only.
+    let fr = unsafe { frustum(&soa, v.rows) };
     let mut r: [Ray; PACKET] = std::array::from_fn(|i| rays[i.min(n - 1)]);
     let mut best: [Option<Hit>; PACKET] = [None; PACKET];
     let mut wr: [Option<WatertightRay>; PACKET] = [None; PACKET];
@@ -413,10 +552,15 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize, const P: bool>(
             let mut hit: [(f32, u32); WIDTH] = [(0.0, 0); WIDTH];
             let mut near = [[0.0f32; PACKET]; WIDTH];
             let mut k = 0;
-            for (l, near_l) in near.iter_mut().enumerate() {
+            // SAFETY: closest8 runs on AVX2 CPUs only.
+            let mut candidates = fr.as_ref().map_or(0xff, |f| unsafe { frustum_lanes(node, f, hmax_all!(cull)) });
+            while candidates != 0 {
+                let l = candidates.trailing_zeros() as usize;
+                candidates &= candidates - 1;
                 if node.child[l] == u32::MAX {
                     continue;
                 }
+                let near_l = &mut near[l];
                 let (m, tn) = lane_box!(node, l, v, cull, active);
                 if _mm256_movemask_ps(m) == 0 {
                     continue;
@@ -648,6 +792,9 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool>(
     let v = regs!(&soa);
     // SAFETY: the Soa row is aligned.
     let cull = unsafe { _mm256_load_ps(soa.cull.as_ptr()) };
+    // SAFETY: any8 runs on AVX2 CPUs only.
+    let fr = unsafe { frustum(&soa, v.rows) };
+    let cull_hi = hmax_all!(cull);
     let mut wr: [Option<WatertightRay>; PACKET] = [None; PACKET];
     // Made at the first leaf that enough rays reach, with the rays' t_max.
     let mut sheared: Option<(Sheared, __m256)> = None;
@@ -704,7 +851,11 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool>(
         // single-ray any-hit walk: a shadow ray's own surface is nearest).
         let mut inner = [(0u32, 0u32, 0.0f32); WIDTH];
         let (mut ni, mut nearest) = (0usize, 0usize);
-        for l in 0..WIDTH {
+        // SAFETY: any8 runs on AVX2 CPUs only.
+        let mut candidates = fr.as_ref().map_or(0xff, |f| unsafe { frustum_lanes(node, f, cull_hi) });
+        while candidates != 0 {
+            let l = candidates.trailing_zeros() as usize;
+            candidates &= candidates - 1;
             if node.child[l] == u32::MAX {
                 continue;
             }
@@ -819,5 +970,115 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool>(
     }
     for (i, o) in out.iter_mut().enumerate() {
         *o = (all & !open) & (1 << i) != 0;
+    }
+}
+
+#[cfg(all(test, target_arch = "x86_64"))]
+mod tests {
+    use glam::Vec3;
+
+    use super::super::wide::WideNode;
+    use super::*;
+    use crate::rng::Pcg32;
+
+    /// The lanes of `node` that some ray of `soa` enters by the exact
+    /// eight-ray test, and the lanes the packet's [`Frustum`] keeps (`None`
+    /// when the packet has no frustum).
+    #[target_feature(enable = "avx2")]
+    fn entered_and_kept(node: &WideNode, soa: &Soa) -> Option<(u32, u32)> {
+        use std::arch::x86_64::*;
+        let v = regs!(soa);
+        // SAFETY: this function runs on AVX2 CPUs only; the Soa row is aligned.
+        let (f, cull) = unsafe { (frustum(soa, v.rows)?, _mm256_load_ps(soa.cull.as_ptr())) };
+        let active = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+        let mut entered = 0;
+        for l in 0..WIDTH {
+            let (m, _) = lane_box!(node, l, v, cull, active);
+            if _mm256_movemask_ps(m) != 0 {
+                entered |= 1 << l;
+            }
+        }
+        // SAFETY: as above.
+        Some((entered, unsafe { frustum_lanes(node, &f, hmax_all!(cull)) }))
+    }
+
+    /// A float of random sign-free magnitude over many binades (and now and then 0).
+    fn magnitude(rng: &mut Pcg32) -> f32 {
+        if rng.below(16) == 0 {
+            return 0.0;
+        }
+        (1.0 + rng.next_f32()) * 2f32.powi(rng.below(60) as i32 - 40)
+    }
+
+    /// The frustum never drops a lane that a ray of the packet enters (the
+    /// oracle is the exact eight-ray box test the walks run), and it does
+    /// drop lanes, so the check is not vacuous. Packets of rays with shared
+    /// direction signs, spread or shared origins, directions over many
+    /// binades (some with reciprocals near overflow, which have no frustum),
+    /// random intervals; boxes around, beside, behind and through the
+    /// origins, thin, flat and empty.
+    #[test]
+    fn the_frustum_keeps_every_lane_a_ray_enters() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let mut rng = Pcg32::new(0xf7, 3);
+        let (mut packets, mut kept, mut entered, mut dropped) = (0, 0u32, 0u32, 0u32);
+        for _ in 0..20_000 {
+            let signs = Vec3::new(
+                if rng.below(2) == 0 { 1.0 } else { -1.0 },
+                if rng.below(2) == 0 { 1.0 } else { -1.0 },
+                if rng.below(2) == 0 { 1.0 } else { -1.0 },
+            );
+            let scale = 2f32.powi(rng.below(20) as i32 - 10);
+            let centre = rng.in_box(Vec3::splat(-4.0 * scale), Vec3::splat(4.0 * scale));
+            let spread = if rng.below(3) == 0 { 0.0 } else { scale * rng.next_f32() };
+            let base = Vec3::new(magnitude(&mut rng), magnitude(&mut rng), magnitude(&mut rng));
+            let rays: Vec<Ray> = (0..PACKET)
+                .map(|_| {
+                    let o = centre + spread * rng.in_box(Vec3::splat(-1.0), Vec3::splat(1.0));
+                    let jitter = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+                    let d = signs * (base + 0.3 * jitter * base.max(Vec3::splat(1e-3)));
+                    let d = if d == Vec3::ZERO { signs } else { d };
+                    let mut r = Ray::new(o, d);
+                    if rng.below(3) == 0 {
+                        r.t_min = scale * rng.next_f32();
+                        r.t_max = r.t_min + 4.0 * scale * rng.next_f32();
+                    }
+                    r
+                })
+                .collect();
+            let soa = Soa::new(&rays);
+            let mut node = WideNode::EMPTY;
+            for l in 0..WIDTH {
+                if rng.below(8) == 0 {
+                    continue;
+                }
+                // Half the boxes sit on a ray of the packet (ahead of or behind its origin).
+                let c = if rng.below(2) == 0 {
+                    let r = &rays[rng.below(PACKET as u32) as usize];
+                    r.origin + (8.0 * rng.next_f32() - 1.0) * scale * r.dir / r.dir.length()
+                } else {
+                    centre + 6.0 * scale * rng.in_box(Vec3::splat(-1.0), Vec3::splat(1.0))
+                };
+                let mut h = scale * Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+                if rng.below(4) == 0 {
+                    h[rng.below(3) as usize] = 0.0;
+                }
+                for a in 0..3 {
+                    node.b[a][l] = c[a] - h[a];
+                    node.b[3 + a][l] = c[a] + h[a];
+                }
+                node.child[l] = l as u32;
+            }
+            // SAFETY: AVX2 was detected above.
+            let Some((e, k)) = (unsafe { entered_and_kept(&node, &soa) }) else { continue };
+            assert_eq!(e & !k, 0, "lanes {:#010b} entered but dropped: {node:?}, {rays:?}", e & !k);
+            packets += 1;
+            kept += k.count_ones();
+            entered += e.count_ones();
+            dropped += (!k & 0xff).count_ones();
+        }
+        assert!(packets > 15_000 && entered > 20_000 && dropped > 20_000, "{packets} {entered} {kept} {dropped}");
     }
 }
