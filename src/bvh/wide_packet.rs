@@ -751,17 +751,17 @@ fn shear8(rays: &[Ray]) -> Sheared {
 }
 
 /// A packet entry (an inner node) with at most this many of its rays still
-/// in it continues ray by ray: half the packet. A packet tests each of a
-/// node's boxes against all eight lanes, so with few rays left most of that
-/// work is wasted, while a single ray tests all eight boxes at once. Measured
-/// with `rtdiff bench --race 3` (batch primary rays, ratio to Embree robust
-/// MEDIUM, two runs each): from 2 rays dragon_full 0.95 / 0.95, from 4 rays
-/// 0.99 / 1.00, from 5 rays 1.01 / 1.01; suzanne and dragon_87k within the
-/// noise for all three. Measured again in one binary (stop 24, `--race 3`,
-/// batch primary Mrays/s, two runs): from 3 rays suzanne 46.6 / 42.8,
-/// dragon_87k 19.8 / 18.9, dragon_full 13.0 / 12.9; from 4: 46.4 / 45.3,
-/// 19.4 / 19.5, 13.2 / 13.2; from 5: 44.6 / 44.1, 18.8 / 19.0, 12.5 / 13.0.
-const SINGLE_RAYS: u32 = 4;
+/// in it continues ray by ray. Since the packet's [`Frustum`] spares it the
+/// eight-ray box test of the children no ray can enter, a packet of two or
+/// three rays walks a node about as cheaply as they would alone, so only a
+/// lone ray leaves the packet (it was 4 before the frustum). Measured in one
+/// binary (stop 30, the value read from an environment variable for the
+/// measurement only, `rtdiff bench --race 3 --threads 1`, batch primary
+/// rays against Embree's default MEDIUM): dragon_87k from 4 rays 1.095 /
+/// 1.096, 3: 1.144, 2: 1.173 / 1.169, 1: 1.202, 0 (never): 1.210;
+/// dragon_full (`--race 2`) 4: 0.966, 2: 1.003, 1: 1.036 / 1.026 / 1.023, 0:
+/// 1.013 / 1.029; suzanne 4: 1.316, 1: 1.310, 0: 1.340.
+const SINGLE_RAYS: u32 = 1;
 
 /// [`SINGLE_RAYS`] for the any-hit packet: an inner node that at most this
 /// many of its rays still reach is walked by each of them alone. Lower than
