@@ -13,7 +13,7 @@
 //! closest hit moved nearer drops the children beyond it. A leaf that most
 //! of the packet's rays reach is tested one triangle against the rays at
 //! once, with the single-ray arithmetic lane for lane (each ray on its own
-//! axis permutation of the watertight test); other leaves are tested ray by
+//! axis permutation of the watertight test, or Moller-Trumbore's operations); other leaves are tested ray by
 //! ray with the single-ray leaf code, and an inner node that at most
 //! `SINGLE_RAYS` (closest hit) or `SINGLE_RAYS_ANY` (any hit) of the packet's
 //! rays reach is walked by each of them alone
@@ -23,7 +23,7 @@
 use std::mem::MaybeUninit;
 
 use crate::geometry::offset::gamma;
-use crate::geometry::triangle::{SIGN_MARGIN, TriangleKernel, WatertightRay, intersect_watertight};
+use crate::geometry::triangle::{SIGN_MARGIN, TriangleKernel, WatertightRay};
 use crate::geometry::{Hit, Ray};
 
 use super::slab::{cull_bound, far_scale};
@@ -318,7 +318,9 @@ macro_rules! hmin {
 }
 
 /// The packet's rays as the watertight test sees them: per ray, the origin
-/// on the ray's permuted axes and its shear.
+/// on the ray's permuted axes and its shear. For the Moller-Trumbore test
+/// ([`rays8`]), which takes no shear, the axes are not permuted and `s`
+/// holds the directions.
 #[cfg(target_arch = "x86_64")]
 struct Sheared {
     /// The rays' common axis permutation (unused when `mixed` is set).
@@ -488,6 +490,108 @@ unsafe fn tri_x8(
     }
 }
 
+/// The Moller-Trumbore test of triangle `(v0, v1, v2)` (lane `l` of `p`)
+/// against the eight rays of `rows` ([`rays8`]: origins in `o`, directions
+/// in `s`), rays in the lanes: `(hit mask, t, u, v)`. Lane for lane the
+/// operations of [`crate::geometry::triangle::intersect_moller_trumbore`] in
+/// the same order (as `packet::tri4_mt_sse` does with triangles in the
+/// lanes; the edges `v1 - v0` and `v2 - v0` are the same in every lane), so
+/// a hit lane's `t, u, v` are the scalar routine's bits, and its rejections
+/// are the same comparisons.
+///
+/// # Safety
+/// The CPU must have AVX2 (the callers are AVX2 functions, into which this is inlined).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn tri_x8_mt(
+    rows: &Sheared,
+    p: &super::packet::Tri4,
+    l: usize,
+    t_max: std::arch::x86_64::__m256,
+) -> (u32, [f32; PACKET], [f32; PACKET], [f32; PACKET]) {
+    // SAFETY: AVX2 is guaranteed by the caller; the stores are justified where they occur.
+    unsafe {
+        use std::arch::x86_64::*;
+        let b = |j: usize, a: usize| _mm256_set1_ps(p.v[3 * j + a][l]);
+        let [ox, oy, oz] = rows.o;
+        let [dx, dy, dz] = rows.s;
+        let (v0x, v0y, v0z) = (b(0, 0), b(0, 1), b(0, 2));
+        // e1 = v1 - v0, e2 = v2 - v0.
+        let (e1x, e1y, e1z) = (_mm256_sub_ps(b(1, 0), v0x), _mm256_sub_ps(b(1, 1), v0y), _mm256_sub_ps(b(1, 2), v0z));
+        let (e2x, e2y, e2z) = (_mm256_sub_ps(b(2, 0), v0x), _mm256_sub_ps(b(2, 1), v0y), _mm256_sub_ps(b(2, 2), v0z));
+        let dot = |ax: __m256, ay: __m256, az: __m256, bx: __m256, by: __m256, bz: __m256| {
+            _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ax, bx), _mm256_mul_ps(ay, by)), _mm256_mul_ps(az, bz))
+        };
+        // p = dir x e2 (glam: x = a.y b.z - b.y a.z, y = a.z b.x - b.z a.x, z = a.x b.y - b.x a.y).
+        let px = _mm256_sub_ps(_mm256_mul_ps(dy, e2z), _mm256_mul_ps(e2y, dz));
+        let py = _mm256_sub_ps(_mm256_mul_ps(dz, e2x), _mm256_mul_ps(e2z, dx));
+        let pz = _mm256_sub_ps(_mm256_mul_ps(dx, e2y), _mm256_mul_ps(e2x, dy));
+        let det = dot(e1x, e1y, e1z, px, py, pz);
+        let (zero, one) = (_mm256_setzero_ps(), _mm256_set1_ps(1.0));
+        // `det == 0 || !det.is_finite()` rejects: keep 0 < |det| < inf (a NaN fails both).
+        let abs_det = _mm256_andnot_ps(_mm256_set1_ps(-0.0), det);
+        let det_ok = _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_GT_OQ>(abs_det, zero),
+            _mm256_cmp_ps::<_CMP_LT_OQ>(abs_det, _mm256_set1_ps(f32::INFINITY)),
+        );
+        let inv_det = _mm256_div_ps(one, det);
+        // tv = origin - v0.
+        let (tvx, tvy, tvz) = (_mm256_sub_ps(ox, v0x), _mm256_sub_ps(oy, v0y), _mm256_sub_ps(oz, v0z));
+        let u = _mm256_mul_ps(dot(tvx, tvy, tvz, px, py, pz), inv_det);
+        // `(0.0..=1.0).contains(&u)`: ordered comparisons, a NaN fails.
+        let ok = _mm256_and_ps(
+            det_ok,
+            _mm256_and_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(u, zero), _mm256_cmp_ps::<_CMP_LE_OQ>(u, one)),
+        );
+        if _mm256_movemask_ps(ok) == 0 {
+            return (0, [0.0; PACKET], [0.0; PACKET], [0.0; PACKET]);
+        }
+        // q = tv x e1.
+        let qx = _mm256_sub_ps(_mm256_mul_ps(tvy, e1z), _mm256_mul_ps(e1y, tvz));
+        let qy = _mm256_sub_ps(_mm256_mul_ps(tvz, e1x), _mm256_mul_ps(e1z, tvx));
+        let qz = _mm256_sub_ps(_mm256_mul_ps(tvx, e1y), _mm256_mul_ps(e1x, tvy));
+        let v = _mm256_mul_ps(dot(dx, dy, dz, qx, qy, qz), inv_det);
+        // `v < 0.0 || u + v > 1.0` rejects (a NaN v passes, as there).
+        let v_out =
+            _mm256_or_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(v, zero), _mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_add_ps(u, v), one));
+        let t = _mm256_mul_ps(dot(e2x, e2y, e2z, qx, qy, qz), inv_det);
+        // `!(t >= t_min && t <= t_max)` rejects: ordered comparisons, a NaN t fails.
+        let in_range = _mm256_and_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(t, rows.t_min), _mm256_cmp_ps::<_CMP_LE_OQ>(t, t_max));
+        let ok = _mm256_andnot_ps(v_out, _mm256_and_ps(ok, in_range));
+        let (mut ts, mut us, mut vs) = ([0.0f32; PACKET], [0.0f32; PACKET], [0.0f32; PACKET]);
+        // Each array has room for 8 floats; storeu has no alignment requirement.
+        _mm256_storeu_ps(ts.as_mut_ptr(), t);
+        _mm256_storeu_ps(us.as_mut_ptr(), u);
+        _mm256_storeu_ps(vs.as_mut_ptr(), v);
+        (_mm256_movemask_ps(ok) as u32, ts, us, vs)
+    }
+}
+
+/// One triangle (lane `l` of `p`) against the packet's eight rays with the
+/// test `K`: `(hit mask, uncertain mask, t, u, v)` ([`tri_x8`] or
+/// [`tri_x8_mt`], which leaves no lane uncertain); `rows` is [`rays8`]'s.
+///
+/// # Safety
+/// The CPU must have AVX2 (the callers are AVX2 functions, into which this is inlined).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn tri_x8_k<K: TriangleKernel>(
+    rows: &Sheared,
+    p: &super::packet::Tri4,
+    l: usize,
+    t_max: std::arch::x86_64::__m256,
+) -> (u32, u32, [f32; PACKET], [f32; PACKET], [f32; PACKET]) {
+    // SAFETY: AVX2 is guaranteed by the caller.
+    unsafe {
+        if K::WATERTIGHT {
+            tri_x8(rows, p, l, t_max)
+        } else {
+            let (ok, t, u, v) = tri_x8_mt(rows, p, l, t_max);
+            (ok, 0, t, u, v)
+        }
+    }
+}
+
 /// Closest hits of up to [`PACKET`] rays, answers into `out` (same length);
 /// `S` is the traversal stack's size, `P` whether hit children are
 /// prefetched (`WideBvh::prefetch_all`, fixed per tree by `WideBvh::kernels`).
@@ -597,13 +701,12 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize, const P: bool>(
                 cur_mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, cull)) as u32;
                 continue 'outer;
             }
-        } else if K::WATERTIGHT
-            && cur.count & ENTRY_LEAF == 0
+        } else if cur.count & ENTRY_LEAF == 0
             && cur_mask.count_ones() >= SOA_LEAF_RAYS
             && let Some(pk) = &bvh.packets
         {
             // One triangle against all the rays at once.
-            let sh = sheared.get_or_insert_with(|| shear8(&r));
+            let sh = sheared.get_or_insert_with(|| rays8::<K>(&r));
             let c = cur.count as usize;
             let mut changed = false;
             let mut t_max = _mm256_setr_ps(
@@ -613,7 +716,7 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize, const P: bool>(
                 let p = &pk.packets[cur.child as usize + k / super::packet::PW];
                 let l = k % super::packet::PW;
                 // SAFETY: closest8 runs on AVX2 CPUs only.
-                let (ok, unc, t, u, vv) = unsafe { tri_x8(sh, p, l, t_max) };
+                let (ok, unc, t, u, vv) = unsafe { tri_x8_k::<K>(sh, p, l, t_max) };
                 let (mut ok, mut unc) = (ok & cur_mask, unc & cur_mask);
                 let mut closer = false;
                 while unc != 0 {
@@ -621,7 +724,7 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize, const P: bool>(
                     unc &= unc - 1;
                     let w = wr[i].get_or_insert_with(|| WatertightRay::new(r[i].dir));
                     let (v0, v1, v2) = (p.vertex(0, l), p.vertex(1, l), p.vertex(2, l));
-                    if let Some((t, u, v2)) = intersect_watertight(&r[i], w, v0, v1, v2) {
+                    if let Some((t, u, v2)) = K::intersect(&r[i], w, v0, v1, v2) {
                         closer |= Hit::offer(&mut best[i], &mut r[i], Hit { t, prim: p.id[l], u, v: v2 });
                     }
                 }
@@ -689,15 +792,28 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize, const P: bool>(
     }
 }
 
-/// The packet as [`Sheared`]: per ray the axis permutation of
-/// [`WatertightRay::new`] (the same axis choice) and its shear (the same
-/// divisions, lane for lane, so the same bits).
+/// The packet's rows for the one-triangle-against-eight-rays tests of `K`:
+/// [`shear8`] for the watertight test; for Moller-Trumbore the origins and
+/// directions as they are (see [`Sheared`]).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn shear8(rays: &[Ray]) -> Sheared {
+fn rays8<K: TriangleKernel>(rays: &[Ray]) -> Sheared {
+    if K::WATERTIGHT {
+        return shear8(rays);
+    }
+    let (d, o, t_min) = gather8(rays);
+    Sheared { k: [0, 1, 2], mixed: None, o, s: d, t_min }
+}
+
+/// The packet's directions, origins and `t_min` as rows of eight lanes
+/// (missing lanes repeat the last ray, as everywhere in the packet),
+/// gathered in memory and then loaded once each.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn gather8(
+    rays: &[Ray],
+) -> ([std::arch::x86_64::__m256; 3], [std::arch::x86_64::__m256; 3], std::arch::x86_64::__m256) {
     use std::arch::x86_64::*;
-    // Rows of eight lanes gathered in memory, then loaded once each (missing
-    // lanes repeat the last ray, as everywhere in the packet).
     let (mut d, mut o, mut t_min) = ([[0.0f32; PACKET]; 3], [[0.0f32; PACKET]; 3], [0.0f32; PACKET]);
     for i in 0..PACKET {
         let r = &rays[i.min(rays.len() - 1)];
@@ -709,7 +825,17 @@ fn shear8(rays: &[Ray]) -> Sheared {
     }
     // SAFETY: each row holds 8 floats; loadu has no alignment requirement.
     let ld = |row: &[f32; PACKET]| unsafe { _mm256_loadu_ps(row.as_ptr()) };
-    let (d, o, t_min) = (d.each_ref().map(ld), o.each_ref().map(ld), ld(&t_min));
+    (d.each_ref().map(ld), o.each_ref().map(ld), ld(&t_min))
+}
+
+/// The packet as [`Sheared`]: per ray the axis permutation of
+/// [`WatertightRay::new`] (the same axis choice) and its shear (the same
+/// divisions, lane for lane, so the same bits).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn shear8(rays: &[Ray]) -> Sheared {
+    use std::arch::x86_64::*;
+    let (d, o, t_min) = gather8(rays);
     let sign = _mm256_set1_ps(-0.0);
     let [ax, ay, az] = d.map(|x| _mm256_andnot_ps(sign, x));
     // kz = 0 where |x| >= |y| and |x| >= |z|, else 1 where |y| >= |z|, else 2.
@@ -879,15 +1005,14 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool>(
                 continue;
             }
             let c = count & !ENTRY_LEAF;
-            if K::WATERTIGHT
-                && count & ENTRY_LEAF == 0
+            if count & ENTRY_LEAF == 0
                 && m.count_ones() >= SOA_LEAF_RAYS_ANY
                 && let Some(pk) = &bvh.packets
             {
                 let (sh, t_max) = sheared.get_or_insert_with(|| {
                     let t_max: [f32; PACKET] = std::array::from_fn(|i| rays[i.min(n - 1)].t_max);
                     // SAFETY: t_max holds 8 floats; loadu has no alignment requirement.
-                    (shear8(rays), unsafe { _mm256_loadu_ps(t_max.as_ptr()) })
+                    (rays8::<K>(rays), unsafe { _mm256_loadu_ps(t_max.as_ptr()) })
                 });
                 // One triangle against all the leaf's rays at once; a ray
                 // leaves the leaf at its first occluder (any occluder will do:
@@ -896,14 +1021,14 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool>(
                     let p = &pk.packets[node.child[l] as usize + k / super::packet::PW];
                     let pl = k % super::packet::PW;
                     // SAFETY: any8 runs on AVX2 CPUs only.
-                    let (ok, unc, _, _, _) = unsafe { tri_x8(sh, p, pl, *t_max) };
+                    let (ok, unc, _, _, _) = unsafe { tri_x8_k::<K>(sh, p, pl, *t_max) };
                     let (mut hit, mut unc) = (ok & m, unc & m);
                     while unc != 0 {
                         let i = unc.trailing_zeros() as usize;
                         unc &= unc - 1;
                         let w = wr[i].get_or_insert_with(|| WatertightRay::new(rays[i].dir));
                         let (v0, v1, v2) = (p.vertex(0, pl), p.vertex(1, pl), p.vertex(2, pl));
-                        if intersect_watertight(&rays[i], w, v0, v1, v2).is_some() {
+                        if K::intersect(&rays[i], w, v0, v1, v2).is_some() {
                             hit |= 1 << i;
                         }
                     }
@@ -1000,6 +1125,76 @@ mod tests {
         }
         // SAFETY: as above.
         Some((entered, unsafe { frustum_lanes(node, &f, hmax_all!(cull)) }))
+    }
+
+    /// One triangle against eight rays with Moller-Trumbore gives, ray by
+    /// ray, the scalar routine's answer bit for bit (hits, edges, vertices,
+    /// finite intervals, degenerate triangles).
+    #[test]
+    fn moller_trumbore_rays_are_the_scalar_routine() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        #[target_feature(enable = "avx2")]
+        fn check(rays: &[Ray], p: &super::super::packet::Tri4, l: usize) -> usize {
+            use std::arch::x86_64::*;
+            let rows = rays8::<crate::geometry::triangle::MollerTrumbore>(rays);
+            let t_max: [f32; PACKET] = std::array::from_fn(|i| rays[i].t_max);
+            // SAFETY: this function runs on AVX2 CPUs only; t_max holds 8 floats.
+            let (mask, t, u, v) = unsafe { tri_x8_mt(&rows, p, l, _mm256_loadu_ps(t_max.as_ptr())) };
+            let mut hits = 0;
+            for (i, r) in rays.iter().enumerate() {
+                let scalar = crate::geometry::triangle::intersect_moller_trumbore(
+                    r,
+                    p.vertex(0, l),
+                    p.vertex(1, l),
+                    p.vertex(2, l),
+                );
+                let simd = (mask >> i & 1 != 0).then(|| (t[i], u[i], v[i]));
+                let bits = |h: Option<(f32, f32, f32)>| h.map(|(a, b, c)| (a.to_bits(), b.to_bits(), c.to_bits()));
+                assert_eq!(bits(simd), bits(scalar), "ray {i} of {rays:?}, lane {l} of {p:?}");
+                hits += usize::from(scalar.is_some());
+            }
+            hits
+        }
+        let mut rng = Pcg32::new(0x3d, 9);
+        let (mut hits, mut cases) = (0, 0);
+        for _ in 0..20_000 {
+            let mut p = super::super::packet::Tri4 { v: [[0.0; 4]; 9], id: [0, 1, 2, 3] };
+            for row in p.v.iter_mut() {
+                for x in row.iter_mut() {
+                    *x = 2.0 * rng.next_f32() - 1.0;
+                }
+            }
+            let l = rng.below(4) as usize;
+            if rng.below(16) == 0 {
+                // A degenerate triangle: two vertices alike.
+                for a in 0..3 {
+                    p.v[3 + a][l] = p.v[a][l];
+                }
+            }
+            let rays: Vec<Ray> = (0..PACKET)
+                .map(|_| {
+                    let o = rng.in_box(Vec3::splat(-2.0), Vec3::splat(2.0));
+                    let (a, b) = (1.2 * rng.next_f32() - 0.1, 1.2 * rng.next_f32() - 0.1);
+                    let (v0, v1, v2) = (p.vertex(0, l), p.vertex(1, l), p.vertex(2, l));
+                    let mut target = v0 + a * (v1 - v0) + b * (v2 - v0);
+                    if rng.below(8) == 0 {
+                        target = [v0, v1, v2][rng.below(3) as usize];
+                    }
+                    let mut r = Ray::new(o, target - o);
+                    if rng.below(4) == 0 {
+                        r.t_min = rng.next_f32();
+                        r.t_max = r.t_min + 2.0 * rng.next_f32();
+                    }
+                    r
+                })
+                .collect();
+            // SAFETY: AVX2 was detected above.
+            hits += unsafe { check(&rays, &p, l) };
+            cases += PACKET;
+        }
+        assert!(hits > cases / 10 && hits < cases * 9 / 10, "{hits} hits of {cases}");
     }
 
     /// A float of random sign-free magnitude over many binades (and now and then 0).
