@@ -167,27 +167,16 @@ macro_rules! regs {
     }};
 }
 
-/// Horizontal minimum of the eight lanes, in every lane.
+/// `$op` (`_mm256_min_ps` or `_mm256_max_ps`) over the eight lanes of
+/// `$v`, the result in every lane.
 #[cfg(target_arch = "x86_64")]
-macro_rules! hmin_all {
-    ($v:expr) => {{
+macro_rules! horizontal {
+    ($op:ident, $v:expr) => {{
         use std::arch::x86_64::*;
         let v = $v;
-        let a = _mm256_min_ps(v, _mm256_permute2f128_ps::<1>(v, v));
-        let b = _mm256_min_ps(a, _mm256_shuffle_ps::<0b01_00_11_10>(a, a));
-        _mm256_min_ps(b, _mm256_shuffle_ps::<0b10_11_00_01>(b, b))
-    }};
-}
-
-/// Horizontal maximum of the eight lanes, in every lane.
-#[cfg(target_arch = "x86_64")]
-macro_rules! hmax_all {
-    ($v:expr) => {{
-        use std::arch::x86_64::*;
-        let v = $v;
-        let a = _mm256_max_ps(v, _mm256_permute2f128_ps::<1>(v, v));
-        let b = _mm256_max_ps(a, _mm256_shuffle_ps::<0b01_00_11_10>(a, a));
-        _mm256_max_ps(b, _mm256_shuffle_ps::<0b10_11_00_01>(b, b))
+        let a = $op(v, _mm256_permute2f128_ps::<1>(v, v));
+        let b = $op(a, _mm256_shuffle_ps::<0b01_00_11_10>(a, a));
+        $op(b, _mm256_shuffle_ps::<0b10_11_00_01>(b, b))
     }};
 }
 
@@ -252,17 +241,17 @@ unsafe fn frustum(s: &Soa, rows: Option<[usize; 6]>) -> Option<Frustum> {
             o_far: [inf; 3],
             inv: [[inf; 2]; 3],
             inv_far: [[inf; 2]; 3],
-            t_min: hmin_all!(ld(&s.t_min)),
+            t_min: horizontal!(_mm256_min_ps, ld(&s.t_min)),
         };
         for a in 0..3 {
             let o = ld(&s.o[a]);
-            let (o_lo, o_hi) = (hmin_all!(o), hmax_all!(o));
+            let (o_lo, o_hi) = (horizontal!(_mm256_min_ps, o), horizontal!(_mm256_max_ps, o));
             // The near plane is the min row (row a) where the reciprocals are positive.
             let positive = rows[a] == a;
             f.near[a] = rows[a] * row;
             f.far[a] = rows[3 + a] * row;
             (f.o_near[a], f.o_far[a]) = if positive { (o_hi, o_lo) } else { (o_lo, o_hi) };
-            f.inv[a] = [hmin_all!(inv[a]), hmax_all!(inv[a])];
+            f.inv[a] = [horizontal!(_mm256_min_ps, inv[a]), horizontal!(_mm256_max_ps, inv[a])];
             // Each ray's far reciprocal is fl(inv far_scale), monotone in inv:
             // the least and greatest are those of the least and greatest inv.
             f.inv_far[a] = [_mm256_mul_ps(f.inv[a][0], fs), _mm256_mul_ps(f.inv[a][1], fs)];
@@ -307,14 +296,9 @@ unsafe fn frustum_lanes(node: &super::wide::WideNode, f: &Frustum, cull_hi: std:
 /// Horizontal minimum of the eight lanes.
 #[cfg(target_arch = "x86_64")]
 macro_rules! hmin {
-    ($v:expr) => {{
-        use std::arch::x86_64::*;
-        let v = $v;
-        let a = _mm256_min_ps(v, _mm256_permute2f128_ps::<1>(v, v));
-        let b = _mm256_min_ps(a, _mm256_shuffle_ps::<0b01_00_11_10>(a, a));
-        let c = _mm256_min_ps(b, _mm256_shuffle_ps::<0b10_11_00_01>(b, b));
-        _mm256_cvtss_f32(c)
-    }};
+    ($v:expr) => {
+        std::arch::x86_64::_mm256_cvtss_f32(horizontal!(_mm256_min_ps, $v))
+    };
 }
 
 /// The packet's rays as the watertight test sees them: per ray, the origin
@@ -657,7 +641,8 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize, const P: bool>(
             let mut near = [[0.0f32; PACKET]; WIDTH];
             let mut k = 0;
             // SAFETY: closest8 runs on AVX2 CPUs only.
-            let mut candidates = fr.as_ref().map_or(0xff, |f| unsafe { frustum_lanes(node, f, hmax_all!(cull)) });
+            let mut candidates =
+                fr.as_ref().map_or(0xff, |f| unsafe { frustum_lanes(node, f, horizontal!(_mm256_max_ps, cull)) });
             while candidates != 0 {
                 let l = candidates.trailing_zeros() as usize;
                 candidates &= candidates - 1;
@@ -920,7 +905,7 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool>(
     let cull = unsafe { _mm256_load_ps(soa.cull.as_ptr()) };
     // SAFETY: any8 runs on AVX2 CPUs only.
     let fr = unsafe { frustum(&soa, v.rows) };
-    let cull_hi = hmax_all!(cull);
+    let cull_hi = horizontal!(_mm256_max_ps, cull);
     let mut wr: [Option<WatertightRay>; PACKET] = [None; PACKET];
     // Made at the first leaf that enough rays reach, with the rays' t_max.
     let mut sheared: Option<(Sheared, __m256)> = None;
@@ -1124,7 +1109,7 @@ mod tests {
             }
         }
         // SAFETY: as above.
-        Some((entered, unsafe { frustum_lanes(node, &f, hmax_all!(cull)) }))
+        Some((entered, unsafe { frustum_lanes(node, &f, horizontal!(_mm256_max_ps, cull)) }))
     }
 
     /// One triangle against eight rays with Moller-Trumbore gives, ray by
