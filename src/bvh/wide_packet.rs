@@ -4,8 +4,9 @@
 //! camera rays, the shadow rays of one surface point).
 //!
 //! The packet walks the tree once: each node is loaded once for all its
-//! rays, and each child box is tested against the eight rays at once (AVX2,
-//! rays in the lanes). The box arithmetic is the single-ray path's, lane for
+//! rays; a [`Frustum`] around the rays (when their directions share signs)
+//! bounds all eight child boxes at once, and each child it keeps is tested
+//! against the eight rays at once (AVX2, rays in the lanes). The box arithmetic is the single-ray path's, lane for
 //! lane (each ray's near and far planes picked by its own direction signs,
 //! the same subtractions, multiplications and NaN-ignoring `max`/`min` in the
 //! same order), so a ray enters exactly the boxes it would enter alone, and
@@ -13,11 +14,11 @@
 //! closest hit moved nearer drops the children beyond it. A leaf that most
 //! of the packet's rays reach is tested one triangle against the rays at
 //! once, with the single-ray arithmetic lane for lane (each ray on its own
-//! axis permutation of the watertight test, or Moller-Trumbore's operations); other leaves are tested ray by
-//! ray with the single-ray leaf code, and an inner node that at most
-//! `SINGLE_RAYS` (closest hit) or `SINGLE_RAYS_ANY` (any hit) of the packet's
-//! rays reach is walked by each of them alone
-//! with the single-ray traversal. Each ray's answer is therefore the
+//! axis permutation of the watertight test, or Moller-Trumbore's
+//! operations); other leaves are tested ray by ray with the single-ray leaf
+//! code, and an inner node that at most `SINGLE_RAYS` (closest hit) or
+//! `SINGLE_RAYS_ANY` (any hit) of the packet's rays reach is walked by each
+//! of them alone with the single-ray traversal. Each ray's answer is therefore the
 //! single-ray answer, bit for bit (the tests check it against brute force).
 
 use std::mem::MaybeUninit;
