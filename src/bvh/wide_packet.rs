@@ -4,7 +4,7 @@
 //! camera rays, the shadow rays of one surface point).
 //!
 //! The packet walks the tree once: each node is loaded once for all its
-//! rays; a [`Frustum`] around the rays (when their directions share signs)
+//! rays; a frustum (`Frustum`) around the rays (when their directions share signs)
 //! bounds all eight child boxes at once, and each child it keeps is tested
 //! against the eight rays at once (AVX2, rays in the lanes). The box arithmetic is the single-ray path's, lane for
 //! lane (each ray's near and far planes picked by its own direction signs,
