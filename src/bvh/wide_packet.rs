@@ -52,6 +52,7 @@ struct Entry {
 #[repr(C, align(32))]
 struct Soa {
     o: [[f32; PACKET]; 3],
+    d: [[f32; PACKET]; 3],
     inv: [[f32; PACKET]; 3],
     inv_far: [[f32; PACKET]; 3],
     t_min: [f32; PACKET],
@@ -59,21 +60,21 @@ struct Soa {
 }
 
 impl Soa {
-    /// Rays `rays` (at most [`PACKET`]); missing lanes repeat ray 0 and are never active.
+    /// Rays `rays` (at most [`PACKET`]); missing lanes repeat the last ray and are never active.
     #[inline(always)]
     fn new(rays: &[Ray]) -> Self {
         let mut s = Soa {
             o: [[0.0; PACKET]; 3],
+            d: [[0.0; PACKET]; 3],
             inv: [[0.0; PACKET]; 3],
             inv_far: [[0.0; PACKET]; 3],
             t_min: [0.0; PACKET],
             cull: [0.0; PACKET],
         };
-        let mut d = [[0.0f32; PACKET]; 3];
         for i in 0..PACKET {
             let r = &rays[i.min(rays.len() - 1)];
             let (o, dir) = (r.origin.to_array(), r.dir.to_array());
-            for (a, (o_row, d_row)) in s.o.iter_mut().zip(d.iter_mut()).enumerate() {
+            for (a, (o_row, d_row)) in s.o.iter_mut().zip(s.d.iter_mut()).enumerate() {
                 o_row[i] = o[a];
                 d_row[i] = dir[a];
             }
@@ -83,7 +84,7 @@ impl Soa {
         // The single-ray path's per-ray constants (`WidePre`: `dir.recip()`
         // and `inv * far_scale()`), as whole rows: the same IEEE divisions
         // and products lane for lane, which the compiler makes eight-wide.
-        for (inv_row, (far_row, d_row)) in s.inv.iter_mut().zip(s.inv_far.iter_mut().zip(&d)) {
+        for (inv_row, (far_row, d_row)) in s.inv.iter_mut().zip(s.inv_far.iter_mut().zip(&s.d)) {
             for ((inv, far), &x) in inv_row.iter_mut().zip(far_row.iter_mut()).zip(d_row) {
                 *inv = 1.0 / x;
                 *far = *inv * far_scale();
@@ -692,7 +693,7 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize, const P: bool>(
             && let Some(pk) = &bvh.packets
         {
             // One triangle against all the rays at once.
-            let sh = sheared.get_or_insert_with(|| rays8::<K>(&r));
+            let sh = sheared.get_or_insert_with(|| rays8::<K>(&soa));
             let c = cur.count as usize;
             let mut changed = false;
             let mut t_max = _mm256_setr_ps(
@@ -783,35 +784,22 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize, const P: bool>(
 /// directions as they are (see [`Sheared`]).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn rays8<K: TriangleKernel>(rays: &[Ray]) -> Sheared {
+fn rays8<K: TriangleKernel>(soa: &Soa) -> Sheared {
     if K::WATERTIGHT {
-        return shear8(rays);
+        return shear8(soa);
     }
-    let (d, o, t_min) = gather8(rays);
+    let (d, o, t_min) = gather8(soa);
     Sheared { k: [0, 1, 2], mixed: None, o, s: d, t_min }
 }
 
-/// The packet's directions, origins and `t_min` as rows of eight lanes
-/// (missing lanes repeat the last ray, as everywhere in the packet),
-/// gathered in memory and then loaded once each.
+/// The packet's directions, origins and `t_min` as rows of eight lanes.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn gather8(
-    rays: &[Ray],
-) -> ([std::arch::x86_64::__m256; 3], [std::arch::x86_64::__m256; 3], std::arch::x86_64::__m256) {
+fn gather8(s: &Soa) -> ([std::arch::x86_64::__m256; 3], [std::arch::x86_64::__m256; 3], std::arch::x86_64::__m256) {
     use std::arch::x86_64::*;
-    let (mut d, mut o, mut t_min) = ([[0.0f32; PACKET]; 3], [[0.0f32; PACKET]; 3], [0.0f32; PACKET]);
-    for i in 0..PACKET {
-        let r = &rays[i.min(rays.len() - 1)];
-        for a in 0..3 {
-            d[a][i] = r.dir[a];
-            o[a][i] = r.origin[a];
-        }
-        t_min[i] = r.t_min;
-    }
-    // SAFETY: each row holds 8 floats; loadu has no alignment requirement.
-    let ld = |row: &[f32; PACKET]| unsafe { _mm256_loadu_ps(row.as_ptr()) };
-    (d.each_ref().map(ld), o.each_ref().map(ld), ld(&t_min))
+    // SAFETY: every row is 32 bytes at a 32-byte multiple of the aligned Soa.
+    let ld = |row: &[f32; PACKET]| unsafe { _mm256_load_ps(row.as_ptr()) };
+    (s.d.each_ref().map(ld), s.o.each_ref().map(ld), ld(&s.t_min))
 }
 
 /// The packet as [`Sheared`]: per ray the axis permutation of
@@ -819,9 +807,9 @@ fn gather8(
 /// divisions, lane for lane, so the same bits).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn shear8(rays: &[Ray]) -> Sheared {
+fn shear8(soa: &Soa) -> Sheared {
     use std::arch::x86_64::*;
-    let (d, o, t_min) = gather8(rays);
+    let (d, o, t_min) = gather8(soa);
     let sign = _mm256_set1_ps(-0.0);
     let [ax, ay, az] = d.map(|x| _mm256_andnot_ps(sign, x));
     // kz = 0 where |x| >= |y| and |x| >= |z|, else 1 where |y| >= |z|, else 2.
@@ -998,7 +986,7 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool>(
                 let (sh, t_max) = sheared.get_or_insert_with(|| {
                     let t_max: [f32; PACKET] = std::array::from_fn(|i| rays[i.min(n - 1)].t_max);
                     // SAFETY: t_max holds 8 floats; loadu has no alignment requirement.
-                    (rays8::<K>(rays), unsafe { _mm256_loadu_ps(t_max.as_ptr()) })
+                    (rays8::<K>(&soa), unsafe { _mm256_loadu_ps(t_max.as_ptr()) })
                 });
                 // One triangle against all the leaf's rays at once; a ray
                 // leaves the leaf at its first occluder (any occluder will do:
@@ -1124,7 +1112,7 @@ mod tests {
         #[target_feature(enable = "avx2")]
         fn check(rays: &[Ray], p: &super::super::packet::Tri4, l: usize) -> usize {
             use std::arch::x86_64::*;
-            let rows = rays8::<crate::geometry::triangle::MollerTrumbore>(rays);
+            let rows = rays8::<crate::geometry::triangle::MollerTrumbore>(&Soa::new(rays));
             let t_max: [f32; PACKET] = std::array::from_fn(|i| rays[i].t_max);
             // SAFETY: this function runs on AVX2 CPUs only; t_max holds 8 floats.
             let (mask, t, u, v) = unsafe { tri_x8_mt(&rows, p, l, _mm256_loadu_ps(t_max.as_ptr())) };
