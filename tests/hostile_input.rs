@@ -374,6 +374,12 @@ fn count_flags_have_limits_named_in_errors_and_help() {
     let (code, err) = rtdiff_cmd(&["bench", s, "--triangle-test", "moller-trumbore"]);
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("--triangle-test applies to --race only"), "{err}");
+    let (code, err) = rtdiff_cmd(&["bench", s, "--embree-max-isa", "avx2"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("--embree-max-isa applies to --race only"), "{err}");
+    let (code, err) = rtdiff_cmd(&["bench", s, "--race", "1", "--embree-max-isa", "avx3"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("\"avx3\"") && err.contains("sse2, sse42, avx, avx2, avx512"), "{err}");
     let (code, err) = rtdiff_cmd(&["render", "--help"]);
     let _ = err;
     assert_eq!(code, 0);

@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::geometry::TriangleTest;
 use crate::limits;
 use crate::perf::bench::{BenchOptions, BenchReport, SHADOW_LIGHTS};
-use crate::perf::race::{MeshRace, RaceOptions};
+use crate::perf::race::{EmbreeIsa, MeshRace, RaceOptions};
 use crate::perf::render_race::{RenderRaceOptions, SceneRace};
 
 /// Arguments of `rtdiff bench`.
@@ -69,6 +69,13 @@ pub struct BenchArgs {
     /// `moller-trumbore`: not watertight, like Embree's default mode).
     #[arg(long, default_value = "watertight", value_parser = parse_triangle_test)]
     pub triangle_test: TriangleTest,
+    /// With `--race`: the widest instruction set Embree's kernels may use
+    /// (`sse2`, `sse42`, `avx`, `avx2`, `avx512`; Embree's `max_isa`). By
+    /// default Embree runs the widest this CPU has, AVX-512 on CPUs that
+    /// have it, while rtdiff's walks are AVX2: `avx2` races both on the same
+    /// instruction set, as on a CPU without AVX-512.
+    #[arg(long, value_name = "ISA", value_parser = parse_embree_isa)]
+    pub embree_max_isa: Option<EmbreeIsa>,
     /// Also write the race's typed report as JSON to this file.
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
@@ -104,6 +111,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if args.triangle_test != TriangleTest::Watertight {
         // The tables time every builder and traversal with the default test.
         return Err(Error::Invalid("--triangle-test applies to --race only".into()));
+    }
+    if args.embree_max_isa.is_some() {
+        return Err(Error::Invalid("--embree-max-isa applies to --race only".into()));
     }
     let scenes =
         if args.scenes.is_empty() { default_meshes(&["dragon_87k", "dragon_full"]) } else { args.scenes.clone() };
@@ -141,8 +151,13 @@ fn race(args: &BenchArgs, rounds: usize) -> Result<()> {
         } else {
             args.scenes.clone()
         };
-        let ropts =
-            RaceOptions { rounds, threads: args.threads.clone(), batches: true, triangle_test: args.triangle_test };
+        let ropts = RaceOptions {
+            rounds,
+            threads: args.threads.clone(),
+            batches: true,
+            triangle_test: args.triangle_test,
+            embree_max_isa: args.embree_max_isa,
+        };
         for s in &files {
             let prims = crate::rays::load_primitives(s, true)?;
             eprintln!("racing {} ...", s.display());
@@ -239,6 +254,12 @@ pub fn print_mesh_race(m: &MeshRace, rounds: usize) {
     println!(
         "\n## {} ({} primitives; rtdiff tree {:.1} bytes per primitive): rtdiff {} against Embree, {rounds} interleaved rounds",
         m.mesh, m.primitives, m.rtdiff_bytes_per_primitive, m.rtdiff
+    );
+    println!(
+        "instruction sets: rtdiff {}, Embree {}{}",
+        m.rtdiff_isa,
+        m.embree_isa.name(),
+        if m.embree_capped { " (capped by --embree-max-isa)" } else { " (the widest this CPU runs)" }
     );
     println!(
         "ratio = Embree time / rtdiff time in the same round (above 1: rtdiff faster); 1 thread: CPU time, more: wall clock"
@@ -370,4 +391,9 @@ pub fn print_goals(meshes: &[MeshRace], renders: &[SceneRace]) {
             if differ.is_empty() { "met".into() } else { format!("NOT: {differ:?}") }
         );
     }
+}
+
+/// `--embree-max-isa`'s value parser.
+fn parse_embree_isa(s: &str) -> std::result::Result<EmbreeIsa, String> {
+    EmbreeIsa::parse(s).map_err(|e| e.to_string())
 }

@@ -107,6 +107,12 @@ pub struct MeshRace {
     pub triangle_test: crate::geometry::TriangleTest,
     /// Bytes of rtdiff's tree (nodes and leaf packets) per primitive.
     pub rtdiff_bytes_per_primitive: f64,
+    /// The instruction set of rtdiff's traversal ([`rtdiff_isa`]).
+    pub rtdiff_isa: String,
+    /// The instruction set of the kernels Embree ran ([`EmbreeIsa::running`]).
+    pub embree_isa: EmbreeIsa,
+    /// Whether Embree was capped below the widest set this CPU runs (`--embree-max-isa`).
+    pub embree_capped: bool,
     /// Every contest, by thread count, workload and opponent.
     pub contests: Vec<Contest>,
     /// Workloads on which a tracer's hit count differs from rtdiff's: `(set, opponent, rtdiff, Embree)`.
@@ -126,6 +132,87 @@ pub struct RaceOptions {
     /// Embree's robust mode) or Moller-Trumbore (like for like with its
     /// default mode: neither is watertight).
     pub triangle_test: crate::geometry::TriangleTest,
+    /// The widest instruction set Embree's kernels may use (its device's
+    /// `max_isa`); `None`: the widest this CPU runs.
+    pub embree_max_isa: Option<EmbreeIsa>,
+}
+
+/// An instruction set Embree's x86 kernels are built for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum EmbreeIsa {
+    /// SSE2.
+    Sse2,
+    /// SSE4.2.
+    Sse42,
+    /// AVX.
+    Avx,
+    /// AVX2 with FMA (what rtdiff's walks use).
+    Avx2,
+    /// AVX-512 (F, CD, DQ, BW, VL: Skylake-X and later, Zen 4 and later).
+    Avx512,
+}
+
+impl EmbreeIsa {
+    /// Every value, narrowest first.
+    pub const ALL: [EmbreeIsa; 5] = [Self::Sse2, Self::Sse42, Self::Avx, Self::Avx2, Self::Avx512];
+
+    /// The name Embree's device configuration (`max_isa=`) and the command line use.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Sse2 => "sse2",
+            Self::Sse42 => "sse42",
+            Self::Avx => "avx",
+            Self::Avx2 => "avx2",
+            Self::Avx512 => "avx512",
+        }
+    }
+
+    /// The value named `s` (see [`Self::name`]).
+    pub fn parse(s: &str) -> Result<Self> {
+        Self::ALL.into_iter().find(|i| i.name() == s).ok_or_else(|| {
+            let names: Vec<&str> = Self::ALL.iter().map(|i| i.name()).collect();
+            crate::Error::Invalid(format!("unknown instruction set {s:?}: expected one of {}", names.join(", ")))
+        })
+    }
+
+    /// The widest of these this CPU runs, as Embree's runtime dispatch
+    /// chooses it (each level needs the features Embree requires for it).
+    pub fn widest_on_this_cpu() -> Self {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::is_x86_feature_detected as has;
+            if has!("avx512f") && has!("avx512cd") && has!("avx512dq") && has!("avx512bw") && has!("avx512vl") {
+                return Self::Avx512;
+            }
+            if has!("avx2") && has!("fma") && has!("bmi1") && has!("bmi2") && has!("lzcnt") {
+                return Self::Avx2;
+            }
+            if has!("avx") {
+                return Self::Avx;
+            }
+            if has!("sse4.2") {
+                return Self::Sse42;
+            }
+        }
+        Self::Sse2
+    }
+
+    /// The kernels Embree runs on this CPU under the cap `max`.
+    pub fn running(max: Option<Self>) -> Self {
+        let widest = Self::widest_on_this_cpu();
+        max.map_or(widest, |m| m.min(widest))
+    }
+}
+
+/// The instruction set of rtdiff's traversal on this CPU: AVX2 and FMA when
+/// the CPU has them (`bvh::wide`), the portable scalar code otherwise.
+pub fn rtdiff_isa() -> &'static str {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        return "avx2";
+    }
+    "portable"
 }
 
 /// [`race_mesh`] on the benchmark's ray sets of `prims` ([`super::bench::RaySets`]:
@@ -213,7 +300,8 @@ pub fn race_mesh(
             .map_err(|e| crate::Error::Invalid(format!("cannot start {threads} threads: {e}")))?;
         // One device per thread count, alone while it is used: Embree runs
         // every device with the largest thread count of the live ones.
-        let device = Device::new(&format!("threads={threads}"))?;
+        let max_isa = opts.embree_max_isa.map(|i| format!(",max_isa={}", i.name())).unwrap_or_default();
+        let device = Device::new(&format!("threads={threads}{max_isa}"))?;
         let clock = Clock { cpu: threads == 1 };
         // Thread CPU time for one thread, the wall clock otherwise.
         let time = |f: &mut dyn FnMut() -> usize| -> (f64, usize) {
@@ -318,6 +406,9 @@ pub fn race_mesh(
         rtdiff,
         triangle_test: opts.triangle_test,
         rtdiff_bytes_per_primitive: bytes,
+        rtdiff_isa: rtdiff_isa().to_string(),
+        embree_isa: EmbreeIsa::running(opts.embree_max_isa),
+        embree_capped: opts.embree_max_isa.is_some_and(|m| m < EmbreeIsa::widest_on_this_cpu()),
         contests,
         hit_count_differences,
     })
@@ -399,5 +490,19 @@ mod tests {
                 assert!(a == b || count > 0, "{a} never ran right after {b}");
             }
         }
+    }
+
+    #[test]
+    fn embree_isa_names_parse_back_and_caps_never_raise_the_set() {
+        use super::EmbreeIsa;
+        for isa in EmbreeIsa::ALL {
+            assert_eq!(EmbreeIsa::parse(isa.name()).unwrap(), isa);
+            // A cap at or above what the CPU runs changes nothing; below, it is the cap.
+            let widest = EmbreeIsa::widest_on_this_cpu();
+            assert_eq!(EmbreeIsa::running(Some(isa)), isa.min(widest));
+        }
+        assert_eq!(EmbreeIsa::running(None), EmbreeIsa::widest_on_this_cpu());
+        let err = EmbreeIsa::parse("avx3").unwrap_err().to_string();
+        assert!(err.contains("avx3") && err.contains("avx512"), "{err}");
     }
 }
