@@ -101,8 +101,8 @@ fn entry(node: &Node, children: Option<(&Entry, &Entry)>) -> Entry {
 ///
 /// A min-plus convolution, lane-parallel over `i` (one pass per `j`,
 /// compare and select, no branches), in two SSE2 halves of four lanes on
-/// x86_64: rustc had left the lane loop scalar. Callgrind, 200 suzanne
-/// builds through `build_tracer` on one thread: 88.4M -> 86.0M instructions.
+/// x86_64: rustc had left the lane loop scalar. Callgrind, the collapse's
+/// table (`fill`) of 200 suzanne trees: 23.2M -> 20.8M instructions.
 #[inline]
 fn both_children(cl: &Row, cr: &Row) -> (Row, [u8; WIDTH + 1]) {
     // `shifted[WIDTH + m] = cr[m]` for `m >= 1` and infinity below, so that

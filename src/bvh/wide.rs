@@ -698,7 +698,7 @@ impl WideBvh {
         self.isa = Isa::Portable;
     }
 
-    /// True when the AVX2 path is used.
+    /// True when the AVX2 path is used (AVX2 and FMA boxes, SSE packets).
     pub fn uses_avx2(&self) -> bool {
         self.isa == Isa::Avx2
     }

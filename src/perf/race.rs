@@ -107,7 +107,8 @@ pub struct MeshRace {
     pub triangle_test: crate::geometry::TriangleTest,
     /// Bytes of rtdiff's tree (nodes and leaf packets) per primitive.
     pub rtdiff_bytes_per_primitive: f64,
-    /// The instruction set of rtdiff's traversal ([`rtdiff_isa`]).
+    /// The instruction set of rtdiff's traversal: `avx2` (AVX2 and FMA,
+    /// [`crate::bvh::WideBvh::uses_avx2`]) or `portable`.
     pub rtdiff_isa: String,
     /// The instruction set of the kernels Embree ran ([`EmbreeIsa::running`]).
     pub embree_isa: EmbreeIsa,
@@ -205,16 +206,6 @@ impl EmbreeIsa {
     }
 }
 
-/// The instruction set of rtdiff's traversal on this CPU: AVX2 and FMA when
-/// the CPU has them (`bvh::wide`), the portable scalar code otherwise.
-pub fn rtdiff_isa() -> &'static str {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-        return "avx2";
-    }
-    "portable"
-}
-
 /// [`race_mesh`] on the benchmark's ray sets of `prims` ([`super::bench::RaySets`]:
 /// `size` x `size` primary rays, `incoherent` incoherent rays, and shadow rays
 /// from the primary hits of the default configuration).
@@ -292,6 +283,7 @@ pub fn race_mesh(
     let mut contests = Vec::new();
     let mut hit_count_differences = Vec::new();
     let mut bytes = 0.0;
+    let mut isa = "portable";
     let mut rtdiff = String::new();
     for &threads in &opts.threads {
         let pool = rayon::ThreadPoolBuilder::new()
@@ -317,6 +309,7 @@ pub fn race_mesh(
         rtdiff = ours.name();
         if let Some(w) = pool.install(|| crate::bvh::BvhTracer::new(prims, &cfg)).wide() {
             bytes = w.bytes() as f64 / prims.len().max(1) as f64;
+            isa = if w.uses_avx2() { "avx2" } else { "portable" };
         }
         let theirs: Vec<EmbreeTracer> = EMBREE_MODES
             .iter()
@@ -406,7 +399,7 @@ pub fn race_mesh(
         rtdiff,
         triangle_test: opts.triangle_test,
         rtdiff_bytes_per_primitive: bytes,
-        rtdiff_isa: rtdiff_isa().to_string(),
+        rtdiff_isa: isa.to_string(),
         embree_isa: EmbreeIsa::running(opts.embree_max_isa),
         embree_capped: opts.embree_max_isa.is_some_and(|m| m < EmbreeIsa::widest_on_this_cpu()),
         contests,
