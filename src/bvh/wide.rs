@@ -17,11 +17,11 @@ use std::mem::MaybeUninit;
 
 use glam::Vec3;
 
-use crate::geometry::triangle::{TriangleKernel, WatertightRay};
+use crate::geometry::triangle::TriangleKernel;
 use crate::geometry::{Hit, Primitives, Ray, TriangleTest};
 
 use super::build::BuiltTree;
-use super::packet::{TriPackets, packets_for};
+use super::packet::{LeafRay, TriPackets, packets_for};
 use super::slab::{cull_bound, far_scale};
 use super::{BinaryBvh, LeafPrims, Node};
 
@@ -155,21 +155,21 @@ impl WidePre {
     }
 }
 
-/// The watertight test's shear for `dir`, made out of line at a ray's first
-/// leaf: most rays of a mesh that does not fill the view reach none, and
-/// keeping it out of the traversal's entry keeps the compiler from computing
-/// it ahead for every ray.
+/// The leaf constants of `ray` ([`LeafRay`]: the watertight test's shear),
+/// made out of line at a ray's first leaf: most rays of a mesh that does not
+/// fill the view reach none, and keeping it out of the traversal's entry
+/// keeps the compiler from computing it ahead for every ray.
 ///
 /// Tests other than the watertight one take no shear: for them this is
-/// [`WatertightRay::UNUSED`], made in line.
+/// [`LeafRay::UNUSED`], made in line.
 #[inline(always)]
-fn shear<K: TriangleKernel>(dir: Vec3) -> WatertightRay {
+fn shear<K: TriangleKernel>(ray: &Ray) -> LeafRay {
     #[cold]
     #[inline(never)]
-    fn made(dir: Vec3) -> WatertightRay {
-        WatertightRay::new(dir)
+    fn made(ray: &Ray) -> LeafRay {
+        LeafRay::new(ray)
     }
-    if K::WATERTIGHT { made(dir) } else { WatertightRay::UNUSED }
+    if K::WATERTIGHT { made(ray) } else { LeafRay::UNUSED }
 }
 
 /// Scalar 8-lane box test: hit mask and entry distances (the arithmetic of
@@ -288,7 +288,7 @@ macro_rules! closest {
         let q = $pre!(&pre);
         // The shear of the triangle test is made at the first leaf: most
         // camera rays of a mesh that does not fill the view reach none.
-        let mut wr: Option<WatertightRay> = None;
+        let mut lr: Option<LeafRay> = None;
         let mut r = *$ray;
         let mut best: Option<Hit> = None;
         let mut cull = cull_bound(r.t_max);
@@ -350,11 +350,11 @@ macro_rules! closest {
             } else if {
                 let n = cur.count & !ENTRY_LEAF;
                 $counts.leaf(cur.child, n);
-                let wr = wr.get_or_insert_with(|| shear::<$k>($ray.dir));
+                let lr = lr.get_or_insert_with(|| shear::<$k>($ray));
                 if cur.count & ENTRY_LEAF != 0 {
-                    $self.prims.intersect_leaf::<$k>(cur.child, n, &mut r, wr, &mut best)
+                    $self.prims.intersect_leaf::<$k>(cur.child, n, &mut r, &lr.wr, &mut best)
                 } else {
-                    $self.packets_closest::<$k>(cur.child, n, &mut r, wr, &mut best, $simd)
+                    $self.packets_closest::<$k>(cur.child, n, &mut r, lr, &mut best, $simd)
                 }
             } {
                 $counts.closer();
@@ -382,7 +382,7 @@ macro_rules! any_hit {
     ($self:ident, $ray:ident, $start:expr, $k:ty, $pre:ident, $box8:ident, $simd:expr, $counts:expr, $stack:expr, $pf:expr) => {{
         let pre = WidePre::new($ray);
         let q = $pre!(&pre);
-        let mut wr: Option<WatertightRay> = None;
+        let mut lr: Option<LeafRay> = None;
         let cull = cull_bound($ray.t_max);
         // Only inner nodes are stacked: hit leaves are tested at once, so an
         // occluder is found before descending further.
@@ -435,11 +435,11 @@ macro_rules! any_hit {
                 if count > 0 {
                     let n = count & !ENTRY_LEAF;
                     $counts.leaf(node.child[l], n);
-                    let wr = wr.get_or_insert_with(|| shear::<$k>($ray.dir));
+                    let lr = lr.get_or_insert_with(|| shear::<$k>($ray));
                     let hit = if count & ENTRY_LEAF != 0 {
-                        $self.prims.occluded_leaf::<$k>(node.child[l], n, $ray, wr)
+                        $self.prims.occluded_leaf::<$k>(node.child[l], n, $ray, &lr.wr)
                     } else {
-                        $self.packets_any::<$k>(node.child[l], n, $ray, wr, $simd)
+                        $self.packets_any::<$k>(node.child[l], n, $ray, lr, $simd)
                     };
                     if hit {
                         return true;
@@ -895,7 +895,7 @@ impl WideBvh {
         first: u32,
         count: u32,
         ray: &mut Ray,
-        wr: &WatertightRay,
+        lr: &LeafRay,
         best: &mut Option<Hit>,
         simd: bool,
     ) -> bool {
@@ -904,12 +904,12 @@ impl WideBvh {
         #[cfg(target_arch = "x86_64")]
         if simd {
             return match K::TEST {
-                TriangleTest::Watertight => pk.intersect_leaf_simd(first, count, ray, wr, best),
+                TriangleTest::Watertight => pk.intersect_leaf_simd(first, count, ray, lr, best),
                 TriangleTest::MollerTrumbore => pk.intersect_leaf_simd_mt(first, count, ray, best),
             };
         }
         let _ = simd;
-        pk.intersect_leaf_scalar::<K>(first, count, ray, wr, best)
+        pk.intersect_leaf_scalar::<K>(first, count, ray, &lr.wr, best)
     }
 
     /// Any-hit test of a triangle leaf (see [`Self::packets_closest`]).
@@ -919,19 +919,19 @@ impl WideBvh {
         first: u32,
         count: u32,
         ray: &Ray,
-        wr: &WatertightRay,
+        lr: &LeafRay,
         simd: bool,
     ) -> bool {
         let Some(pk) = &self.packets else { return false };
         #[cfg(target_arch = "x86_64")]
         if simd {
             return match K::TEST {
-                TriangleTest::Watertight => pk.occluded_leaf_simd(first, count, ray, wr),
+                TriangleTest::Watertight => pk.occluded_leaf_simd(first, count, ray, lr),
                 TriangleTest::MollerTrumbore => pk.occluded_leaf_simd_mt(first, count, ray),
             };
         }
         let _ = simd;
-        pk.occluded_leaf_scalar::<K>(first, count, ray, wr)
+        pk.occluded_leaf_scalar::<K>(first, count, ray, &lr.wr)
     }
 
     #[inline(always)]

@@ -24,9 +24,10 @@
 use std::mem::MaybeUninit;
 
 use crate::geometry::offset::gamma;
-use crate::geometry::triangle::{SIGN_MARGIN, TriangleKernel, WatertightRay};
+use crate::geometry::triangle::{SIGN_MARGIN, TriangleKernel};
 use crate::geometry::{Hit, Ray};
 
+use super::packet::LeafRay;
 use super::slab::{cull_bound, far_scale};
 use super::wide::{ENTRY_LEAF, WIDTH, WideBvh};
 
@@ -599,7 +600,7 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize, const P: bool>(
     let fr = unsafe { frustum(&soa, v.rows) };
     let mut r: [Ray; PACKET] = std::array::from_fn(|i| rays[i.min(n - 1)]);
     let mut best: [Option<Hit>; PACKET] = [None; PACKET];
-    let mut wr: [Option<WatertightRay>; PACKET] = [None; PACKET];
+    let mut wr: [Option<LeafRay>; PACKET] = [None; PACKET];
     // Made at the first leaf that enough rays reach.
     let mut sheared: Option<Sheared> = None;
     let lanes = if n == PACKET { u32::MAX } else { (1u32 << n) - 1 };
@@ -709,9 +710,9 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize, const P: bool>(
                 while unc != 0 {
                     let i = unc.trailing_zeros() as usize;
                     unc &= unc - 1;
-                    let w = wr[i].get_or_insert_with(|| WatertightRay::new(r[i].dir));
+                    let w = wr[i].get_or_insert_with(|| LeafRay::new(&r[i]));
                     let (v0, v1, v2) = (p.vertex(0, l), p.vertex(1, l), p.vertex(2, l));
-                    if let Some((t, u, v2)) = K::intersect(&r[i], w, v0, v1, v2) {
+                    if let Some((t, u, v2)) = K::intersect(&r[i], &w.wr, v0, v1, v2) {
                         closer |= Hit::offer(&mut best[i], &mut r[i], Hit { t, prim: p.id[l], u, v: v2 });
                     }
                 }
@@ -741,9 +742,9 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize, const P: bool>(
             while m != 0 {
                 let i = m.trailing_zeros() as usize;
                 m &= m - 1;
-                let w = wr[i].get_or_insert_with(|| WatertightRay::new(r[i].dir));
+                let w = wr[i].get_or_insert_with(|| LeafRay::new(&r[i]));
                 let closer = if cur.count & ENTRY_LEAF != 0 {
-                    bvh.prims.intersect_leaf::<K>(cur.child, c, &mut r[i], w, &mut best[i])
+                    bvh.prims.intersect_leaf::<K>(cur.child, c, &mut r[i], &w.wr, &mut best[i])
                 } else {
                     bvh.packets_closest::<K>(cur.child, c, &mut r[i], w, &mut best[i], true)
                 };
@@ -803,7 +804,7 @@ fn gather8(s: &Soa) -> ([std::arch::x86_64::__m256; 3], [std::arch::x86_64::__m2
 }
 
 /// The packet as [`Sheared`]: per ray the axis permutation of
-/// [`WatertightRay::new`] (the same axis choice) and its shear (the same
+/// [`crate::geometry::triangle::WatertightRay::new`] (the same axis choice) and its shear (the same
 /// divisions, lane for lane, so the same bits).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
@@ -895,7 +896,7 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool>(
     // SAFETY: any8 runs on AVX2 CPUs only.
     let fr = unsafe { frustum(&soa, v.rows) };
     let cull_hi = horizontal!(_mm256_max_ps, cull);
-    let mut wr: [Option<WatertightRay>; PACKET] = [None; PACKET];
+    let mut wr: [Option<LeafRay>; PACKET] = [None; PACKET];
     // Made at the first leaf that enough rays reach, with the rays' t_max.
     let mut sheared: Option<(Sheared, __m256)> = None;
     // Rays still looking for an occluder.
@@ -1000,9 +1001,9 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool>(
                     while unc != 0 {
                         let i = unc.trailing_zeros() as usize;
                         unc &= unc - 1;
-                        let w = wr[i].get_or_insert_with(|| WatertightRay::new(rays[i].dir));
+                        let w = wr[i].get_or_insert_with(|| LeafRay::new(&rays[i]));
                         let (v0, v1, v2) = (p.vertex(0, pl), p.vertex(1, pl), p.vertex(2, pl));
-                        if K::intersect(&rays[i], w, v0, v1, v2).is_some() {
+                        if K::intersect(&rays[i], &w.wr, v0, v1, v2).is_some() {
                             hit |= 1 << i;
                         }
                     }
@@ -1019,9 +1020,9 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool>(
                 let i = m.trailing_zeros() as usize;
                 m &= m - 1;
                 let r = &rays[i];
-                let w = wr[i].get_or_insert_with(|| WatertightRay::new(r.dir));
+                let w = wr[i].get_or_insert_with(|| LeafRay::new(r));
                 let hit = if count & ENTRY_LEAF != 0 {
-                    bvh.prims.occluded_leaf::<K>(node.child[l], c, r, w)
+                    bvh.prims.occluded_leaf::<K>(node.child[l], c, r, &w.wr)
                 } else {
                     bvh.packets_any::<K>(node.child[l], c, r, w, true)
                 };
