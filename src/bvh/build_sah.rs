@@ -99,23 +99,45 @@ thread_local! {
     /// Per-thread bin storage reused across nodes (no allocation per node).
     static SCRATCH: std::cell::RefCell<Scratch> = const {
         std::cell::RefCell::new(Scratch {
-            count: Vec::new(),
-            boxes: Vec::new(),
+            bins: Vec::new(),
             soa: Vec::new(),
             right_area: Vec::new(),
             right_count: Vec::new(),
-            count2: Vec::new(),
-            boxes2: Vec::new(),
+            bins2: Vec::new(),
         })
     };
 }
 
-/// Bins of one node, bin-major: entry `3 k + a` is bin `k` of axis `a`.
+/// Bin `k` of all three axes: lane `a` of `count` and box `b[a]` belong to
+/// bin `k` of axis `a`. One record per bin (not a count array beside a box
+/// array): a reference's three updates then index one slice, whose bounds
+/// check one clamp removes; with two arrays of unrelated lengths each update
+/// kept its own checks (about ten instructions of a reference's 75).
+#[derive(Clone, Copy)]
+struct Bin {
+    /// Primitives in the bin, per axis.
+    count: UVec4,
+    /// Box of the bin's primitives, per axis.
+    b: [BoxA; 3],
+}
+
+impl Bin {
+    const EMPTY: Bin = Bin { count: UVec4::ZERO, b: [BoxA::EMPTY; 3] };
+
+    /// Add `o`'s primitives (counts add and boxes unite exactly, in any order).
+    #[inline(always)]
+    fn merge(&mut self, o: &Bin) {
+        self.count += o.count;
+        for (x, y) in self.b.iter_mut().zip(&o.b) {
+            *x = x.union(*y);
+        }
+    }
+}
+
+/// Per-thread scratch of a node's split.
 struct Scratch {
-    /// Primitives per bin: `count[k]` lane `a` for axis `a`.
-    count: Vec<UVec4>,
-    /// Box of each bin.
-    boxes: Vec<BoxA>,
+    /// The node's bins.
+    bins: Vec<Bin>,
     /// The bins transposed for the sweeps.
     soa: Vec<Transposed>,
     /// Per bin `s`, lane `a`: half area of the union of bins `s..` of axis `a`.
@@ -123,9 +145,7 @@ struct Scratch {
     /// Per bin `s`, lane `a`: primitives in bins `s..` of axis `a`, in whole blocks.
     right_count: Vec<Vec3A>,
     /// A second set of bins for the odd primitives of [`bin_into2`].
-    count2: Vec<UVec4>,
-    /// Boxes of the second set.
-    boxes2: Vec<BoxA>,
+    bins2: Vec<Bin>,
 }
 
 /// Make `v` at least `n` long (new entries `value`; existing ones kept).
@@ -142,11 +162,16 @@ pub fn leaf_slots(n: usize) -> usize {
 }
 
 /// `n` rounded up to whole blocks of [`BLOCK`], per lane, as floats.
+///
+/// Converted as signed integers (one instruction; SSE2 has no unsigned
+/// conversion, which took eight): a count is at most a node's references,
+/// below 2^31 for any mesh that fits in memory (2^31 references take 64 GiB),
+/// and a count beyond would only misprice a split, not change an answer.
 #[inline(always)]
 fn block_slots(n: UVec4) -> Vec3A {
     const { assert!(BLOCK.is_power_of_two()) };
     let shift = BLOCK.trailing_zeros();
-    Vec3A::from_vec4((((n + UVec4::splat(BLOCK as u32 - 1)) >> shift) << shift).as_vec4())
+    Vec3A::from_vec4((((n + UVec4::splat(BLOCK as u32 - 1)) >> shift) << shift).as_ivec4().as_vec4())
 }
 
 /// Three boxes (one bin of each axis) transposed: `lo[c]` and `hi[c]` hold
@@ -160,9 +185,9 @@ struct Transposed {
 impl Transposed {
     const EMPTY: Transposed = Transposed { lo: [Vec3A::INFINITY; 3], hi: [Vec3A::NEG_INFINITY; 3] };
 
-    /// Transpose the three boxes `b[0..3]`.
+    /// Transpose the three boxes `b`.
     #[inline(always)]
-    fn of(b: &[BoxA]) -> Self {
+    fn of(b: &[BoxA; 3]) -> Self {
         let t = |f: fn(&BoxA) -> Vec3A, c: usize| Vec3A::new(f(&b[0])[c], f(&b[1])[c], f(&b[2])[c]);
         Self {
             lo: [t(|b| b.min, 0), t(|b| b.min, 1), t(|b| b.min, 2)],
@@ -188,60 +213,47 @@ impl Transposed {
 /// Nodes with at least this many primitives bin in parallel (when the pool has more than one thread).
 const PARALLEL_BINNING: usize = 1 << 16;
 
-/// Add the primitives of `refs` to the bins (`count`, `boxes`, bin-major:
-/// entry `3 k + a` is bin `k` of axis `a`).
+/// Add the primitives of `refs` to `bins`.
 #[inline(always)]
-fn bin_into(refs: &[PrimRef], count: &mut [UVec4], boxes: &mut [BoxA], cmin: Vec3A, scale: Vec3A, lastf: Vec3A) {
+fn bin_into(refs: &[PrimRef], bins: &mut [Bin], cmin: Vec3A, scale: Vec3A, lastf: Vec3A) {
     for r in refs {
-        bin_one(r.boxa(), count, boxes, cmin, scale, lastf);
+        bin_one(r.boxa(), bins, cmin, scale, lastf);
     }
 }
 
 /// Add the primitive with box `b` to the bins of every axis.
 #[inline(always)]
-fn bin_one(b: BoxA, count: &mut [UVec4], boxes: &mut [BoxA], cmin: Vec3A, scale: Vec3A, lastf: Vec3A) {
-    let nb = count.len();
+fn bin_one(b: BoxA, bins: &mut [Bin], cmin: Vec3A, scale: Vec3A, lastf: Vec3A) {
+    let last = bins.len() - 1;
     let k = bins_of((b.min + b.max) * 0.5, cmin, scale, lastf);
     for (a, &ka) in k.iter().enumerate() {
-        // bins_of returns values in 0..nb; the clamp only lets the
-        // compiler drop the bounds checks.
-        let ka = ka.min(nb - 1);
-        count[ka][a] += 1;
-        let j = 3 * ka + a;
-        boxes[j] = boxes[j].union(b);
+        // bins_of returns values in 0..bins.len(); the clamp only lets the
+        // compiler drop the bounds check.
+        let bin = &mut bins[ka.min(last)];
+        bin.count[a] += 1;
+        bin.b[a] = bin.b[a].union(b);
     }
 }
 
 /// Nodes with at least this many primitives bin into two sets of bins (see [`bin_into2`]).
 const TWO_WAY_BINNING: usize = 64;
 
-/// [`bin_into`] with the even primitives in `count`/`boxes` and the odd ones
-/// in `count2`/`boxes2` (both cleared by the caller), then the second set
-/// added into the first. After the first splits, neighbouring primitives of a
+/// [`bin_into`] with the even primitives in `bins` and the odd ones in
+/// `bins2` (both cleared by the caller, of one length), then the second set
+/// merged into the first. After the first splits, neighbouring primitives of a
 /// node usually fall in the same bins, and with one set each update of a bin
 /// waits for the previous one's store; two sets halve that chain. Counts add
 /// and boxes unite exactly, so the bins are those of one pass.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn bin_into2(
-    refs: &[PrimRef],
-    count: &mut [UVec4],
-    boxes: &mut [BoxA],
-    count2: &mut [UVec4],
-    boxes2: &mut [BoxA],
-    cmin: Vec3A,
-    scale: Vec3A,
-    lastf: Vec3A,
-) {
+fn bin_into2(refs: &[PrimRef], bins: &mut [Bin], bins2: &mut [Bin], cmin: Vec3A, scale: Vec3A, lastf: Vec3A) {
     let pairs = refs.chunks_exact(2);
     let rest = pairs.remainder();
     for p in pairs {
-        bin_one(p[0].boxa(), count, boxes, cmin, scale, lastf);
-        bin_one(p[1].boxa(), count2, boxes2, cmin, scale, lastf);
+        bin_one(p[0].boxa(), bins, cmin, scale, lastf);
+        bin_one(p[1].boxa(), bins2, cmin, scale, lastf);
     }
-    bin_into(rest, count, boxes, cmin, scale, lastf);
-    count.iter_mut().zip(count2.iter()).for_each(|(x, y)| *x += *y);
-    boxes.iter_mut().zip(boxes2.iter()).for_each(|(x, y)| *x = x.union(*y));
+    bin_into(rest, bins, cmin, scale, lastf);
+    bins.iter_mut().zip(bins2.iter()).for_each(|(x, y)| x.merge(y));
 }
 
 /// In-place partition of `idx` by `side(centroid)` (1: left); returns the
@@ -297,62 +309,63 @@ impl SahSplit {
     ) -> Option<Split> {
         let n = idx.len();
         let last = nb as u32 - 1;
-        let Scratch { count, boxes, soa, right_area, right_count, count2, boxes2 } = scratch;
+        let Scratch { bins, soa, right_area, right_count, bins2 } = scratch;
         // The bins are accumulated into, so they start empty; the sweep
         // arrays are written before they are read and only need the room.
-        grow(count, nb, UVec4::ZERO);
-        count[..nb].fill(UVec4::ZERO);
-        grow(boxes, 3 * nb, BoxA::EMPTY);
-        boxes[..3 * nb].fill(BoxA::EMPTY);
+        grow(bins, nb, Bin::EMPTY);
+        bins[..nb].fill(Bin::EMPTY);
         grow(right_area, nb, Vec3A::ZERO);
         grow(right_count, nb, Vec3A::ZERO);
         grow(soa, nb, Transposed::EMPTY);
         let lastf = Vec3A::splat(last as f32);
-        let (count, boxes) = (&mut count[..nb], &mut boxes[..3 * nb]);
+        let bins = &mut bins[..nb];
         if n >= PARALLEL_BINNING && rayon::current_num_threads() > 1 {
             // Large nodes (the top of the tree, which no fork shares out) bin
             // in parallel chunks whose bins are then merged: counts add and
             // boxes unite exactly, so the bins are those of one sequential pass.
             use rayon::prelude::*;
-            let (c, b) = idx
+            let merged = idx
                 .par_chunks(PARALLEL_BINNING / 4)
                 .map(|chunk| {
-                    let (mut c, mut b) = (vec![UVec4::ZERO; nb], vec![BoxA::EMPTY; 3 * nb]);
-                    bin_into(chunk, &mut c, &mut b, cb.min, scale, lastf);
-                    (c, b)
+                    let mut b = vec![Bin::EMPTY; nb];
+                    bin_into(chunk, &mut b, cb.min, scale, lastf);
+                    b
                 })
-                .reduce_with(|(mut c0, mut b0), (c1, b1)| {
-                    c0.iter_mut().zip(&c1).for_each(|(x, y)| *x += *y);
-                    b0.iter_mut().zip(&b1).for_each(|(x, y)| *x = x.union(*y));
-                    (c0, b0)
+                .reduce_with(|mut b0, b1| {
+                    b0.iter_mut().zip(&b1).for_each(|(x, y)| x.merge(y));
+                    b0
                 })
                 .expect("a node has primitives");
-            count.copy_from_slice(&c);
-            boxes.copy_from_slice(&b);
+            bins.copy_from_slice(&merged);
         } else if n >= TWO_WAY_BINNING {
-            grow(count2, nb, UVec4::ZERO);
-            count2[..nb].fill(UVec4::ZERO);
-            grow(boxes2, 3 * nb, BoxA::EMPTY);
-            boxes2[..3 * nb].fill(BoxA::EMPTY);
-            bin_into2(idx, count, boxes, &mut count2[..nb], &mut boxes2[..3 * nb], cb.min, scale, lastf);
+            grow(bins2, nb, Bin::EMPTY);
+            bins2[..nb].fill(Bin::EMPTY);
+            bin_into2(idx, bins, &mut bins2[..nb], cb.min, scale, lastf);
         } else {
-            bin_into(idx, count, boxes, cb.min, scale, lastf);
+            bin_into(idx, bins, cb.min, scale, lastf);
         }
 
         // Best split: minimise A_l B(N_l) + A_r B(N_r) (the constant terms of
         // the cost do not change the argmin), the three axes at once, one per
         // lane: the bins are transposed so that each coordinate of the three
         // axes' boxes sits in one vector.
-        for (k, t) in soa[..nb].iter_mut().enumerate() {
-            *t = Transposed::of(&boxes[3 * k..3 * k + 3]);
+        // Every array cut to the node's `nb` bins up front and walked by
+        // iterators: indexing four arrays of independent lengths kept six
+        // bounds checks in each sweep step.
+        let soa = &mut soa[..nb];
+        let (right_area, right_count) = (&mut right_area[..nb], &mut right_count[..nb]);
+        for (t, b) in soa.iter_mut().zip(bins.iter()) {
+            *t = Transposed::of(&b.b);
         }
         let mut run = Transposed::EMPTY;
         let mut rn = UVec4::ZERO;
-        for s in (1..nb).rev() {
-            run = run.union(&soa[s]);
-            rn += count[s];
-            right_area[s] = run.half_area();
-            right_count[s] = block_slots(rn);
+        for (((t, b), ra), rc) in
+            soa.iter().zip(bins.iter()).zip(right_area.iter_mut()).zip(right_count.iter_mut()).skip(1).rev()
+        {
+            run = run.union(t);
+            rn += b.count;
+            *ra = run.half_area();
+            *rc = block_slots(rn);
         }
         // Axes whose centroids all coincide cannot be split.
         let axis_ok = scale.cmpgt(Vec3A::ZERO);
@@ -360,15 +373,18 @@ impl SahSplit {
         let mut best_bin = Vec3A::ZERO;
         let mut run = Transposed::EMPTY;
         let mut ln = UVec4::ZERO;
-        for s in 0..nb - 1 {
-            run = run.union(&soa[s]);
-            ln += count[s];
-            let (lb, rb) = (block_slots(ln), right_count[s + 1]);
-            let cost = run.half_area() * lb + right_area[s + 1] * rb;
+        // Bin `s` as a float, counted alongside (an exact integer).
+        let mut sf = Vec3A::ZERO;
+        for ((t, b), (&ra, &rb)) in soa.iter().zip(bins.iter()).zip(right_area.iter().zip(right_count.iter()).skip(1)) {
+            run = run.union(t);
+            ln += b.count;
+            let lb = block_slots(ln);
+            let cost = run.half_area() * lb + ra * rb;
             // Both sides non-empty, and strictly cheaper: the first minimum per axis wins.
             let better = cost.cmplt(best_cost) & axis_ok & lb.cmpgt(Vec3A::ZERO) & rb.cmpgt(Vec3A::ZERO);
             best_cost = Vec3A::select(better, cost, best_cost);
-            best_bin = Vec3A::select(better, Vec3A::splat(s as f32), best_bin);
+            best_bin = Vec3A::select(better, sf, best_bin);
+            sf += Vec3A::ONE;
         }
         // Lowest axis among the cheapest (the order of a sequential search).
         let (mut axis, mut cost) = (usize::MAX, f32::INFINITY);
@@ -388,9 +404,10 @@ impl SahSplit {
         if n <= SAH_MAX_LEAF && split_cost >= leaf_cost {
             return None;
         }
-        let lb = (0..=s).fold(BoxA::EMPTY, |b, k| b.union(boxes[3 * k + axis])).aabb();
-        let rb = (s + 1..nb).fold(BoxA::EMPTY, |b, k| b.union(boxes[3 * k + axis])).aabb();
-        let nl = (0..=s).map(|k| count[k][axis] as usize).sum::<usize>();
+        let (left, right) = bins.split_at(s + 1);
+        let lb = left.iter().fold(BoxA::EMPTY, |b, k| b.union(k.b[axis])).aabb();
+        let rb = right.iter().fold(BoxA::EMPTY, |b, k| b.union(k.b[axis])).aabb();
+        let nl = left.iter().map(|k| k.count[axis] as usize).sum::<usize>();
         // `bins_of(c)[axis] <= s`, i.e. `trunc(min(x, last)) <= s` for the
         // non-negative `x = (c - cmin) * scale`, is `x < s + 1` (an exact
         // integer no greater than `last`), evaluated with the same per-lane
