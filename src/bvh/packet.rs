@@ -505,6 +505,7 @@ mod tests {
         let origin = v3(coord(rng), coord(rng), coord(rng));
         let mut dir = v3(coord(rng), coord(rng), coord(rng));
         if rng.below(2) == 0 {
+            // Aim at (or just beside) one lane's triangle: hits, edges and vertices.
             let l = rng.below(PW as u32) as usize;
             let (a, b) = (1.2 * rng.next_f32() - 0.1, 1.2 * rng.next_f32() - 0.1);
             let (v0, v1, v2) = (p.vertex(0, l), p.vertex(1, l), p.vertex(2, l));
@@ -568,28 +569,7 @@ mod tests {
         let mut rng = Pcg32::new(0x4d54, 7);
         let (mut hits, mut cases) = (0, 0);
         for _ in 0..50_000 {
-            let mut p = Tri4 { v: [[0.0; PW]; 9], id: [0, 1, 2, 3] };
-            // Lanes share vertices now and then, as a mesh's neighbours do.
-            for l in 0..PW {
-                for r in 0..9 {
-                    p.v[r][l] = if l > 0 && rng.below(4) == 0 { p.v[r][l - 1] } else { coord(&mut rng) };
-                }
-            }
-            let v3 = |a: f32, b: f32, c: f32| glam::Vec3::new(a, b, c);
-            let origin = v3(coord(&mut rng), coord(&mut rng), coord(&mut rng));
-            let mut dir = v3(coord(&mut rng), coord(&mut rng), coord(&mut rng));
-            if rng.below(2) == 0 {
-                // Aim at (or just beside) one lane's triangle: hits, edges and vertices.
-                let l = rng.below(PW as u32) as usize;
-                let (a, b) = (1.2 * rng.next_f32() - 0.1, 1.2 * rng.next_f32() - 0.1);
-                let (v0, v1, v2) = (p.vertex(0, l), p.vertex(1, l), p.vertex(2, l));
-                dir = v0 + a * (v1 - v0) + b * (v2 - v0) - origin;
-            }
-            let mut ray = Ray::new(origin, dir);
-            if rng.below(4) == 0 {
-                ray.t_min = rng.next_f32();
-                ray.t_max = ray.t_min + 4.0 * rng.next_f32();
-            }
+            let (p, ray) = packet_and_ray(&mut rng);
             let (mask, t, u, v) = tri4_mt_sse(&p, &ray);
             for l in 0..PW {
                 let scalar = intersect_moller_trumbore(&ray, p.vertex(0, l), p.vertex(1, l), p.vertex(2, l));
