@@ -661,8 +661,16 @@ impl WideBvh {
             let prims = LeafPrims { entries, num_triangles, spheres };
             return Self::finish(nodes, prims, Some(packets));
         }
-        for node in &mut nodes {
-            touch_leaves(node, &touch);
+        if let Some(first) = nodes.first() {
+            touch_leaves(first, &touch);
+        }
+        for i in 0..nodes.len() {
+            // The next node's triangles are requested while this node's are
+            // packed, so that their cache misses overlap the packing.
+            if let Some(next) = nodes.get(i + 1) {
+                touch_leaves(next, &touch);
+            }
+            let node = &mut nodes[i];
             for l in 0..WIDTH {
                 let (first, count) = (node.child[l], node.count[l]);
                 if count == 0 {
@@ -1098,20 +1106,32 @@ fn pack_parallel(
         start += k as u32;
         rest = tail;
     }
-    nodes.par_iter_mut().zip(chunks).with_min_len(256).for_each(|(node, (mut at, dst))| {
-        touch_leaves(node, touch);
-        let mut w = 0;
-        for l in 0..WIDTH {
-            let (first, count) = (node.child[l], node.count[l]);
-            if count == 0 {
-                continue;
+    // Groups of consecutive nodes; in each, the next node's triangles are
+    // requested while this node's are packed (as in the serial loop).
+    const GROUP: usize = 256;
+    nodes.par_chunks_mut(GROUP).zip(chunks.par_chunks_mut(GROUP)).for_each(|(group, dsts)| {
+        if let Some(first) = group.first() {
+            touch_leaves(first, touch);
+        }
+        for i in 0..group.len() {
+            if let Some(next) = group.get(i + 1) {
+                touch_leaves(next, touch);
             }
-            node.child[l] = at;
-            for c in 0..packets_for(count) {
-                dst[w].write(super::packet::leaf_packet(first, count, c, tri));
-                w += 1;
+            let (mut at, dst) = (dsts[i].0, std::mem::take(&mut dsts[i].1));
+            let node = &mut group[i];
+            let mut w = 0;
+            for l in 0..WIDTH {
+                let (first, count) = (node.child[l], node.count[l]);
+                if count == 0 {
+                    continue;
+                }
+                node.child[l] = at;
+                for c in 0..packets_for(count) {
+                    dst[w].write(super::packet::leaf_packet(first, count, c, tri));
+                    w += 1;
+                }
+                at += packets_for(count) as u32;
             }
-            at += packets_for(count) as u32;
         }
     });
     // SAFETY: the chunks cover the first `npk` slots exactly and every one of
