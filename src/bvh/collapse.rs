@@ -16,6 +16,8 @@
 //! collapsing leaves many two-lane nodes, and merges small sibling leaves into
 //! one leaf where a node visit costs more than the extra packet.
 
+use std::mem::MaybeUninit;
+
 use super::Node;
 use super::packet::packets_for;
 use super::wide::{WIDTH, WideNode};
@@ -65,8 +67,6 @@ struct Entry {
     /// First primitive and primitive count of the subtree.
     range: (u32, u32),
 }
-
-const EMPTY_ENTRY: Entry = Entry { cost: [0.0; WIDTH + 1], split: [0; WIDTH + 1], as_leaf: false, range: (0, 0) };
 
 /// The dynamic-programming tables of one binary tree.
 struct Plan<'a> {
@@ -184,35 +184,45 @@ fn both_children(cl: &Row, cr: &Row) -> (Row, [u8; WIDTH + 1]) {
 
 /// Fill `t`, the entries of the subtree of binary node `base` (the nodes
 /// `base .. base + t.len()`, depth-first), children before parents; the two
-/// subtrees of a large node in parallel.
-fn fill(bin: &[Node], base: usize, t: &mut [Entry]) {
+/// subtrees of a large node in parallel. Every entry is written exactly
+/// once, each after its children's: the table needs no initialisation (its
+/// pages are first touched here, by both threads of a parallel fill).
+fn fill(bin: &[Node], base: usize, t: &mut [MaybeUninit<Entry>]) {
     let node = &bin[base];
     if !node.is_leaf() && t.len() >= FILL_PARALLEL_THRESHOLD && rayon::current_num_threads() > 1 {
         let right = node.offset as usize;
         let (head, rest) = t.split_at_mut(1);
         let (lt, rt) = rest.split_at_mut(right - base - 1);
         rayon::join(|| fill(bin, base + 1, lt), || fill(bin, right, rt));
-        head[0] = entry(node, Some((&lt[0], &rt[0])));
+        // SAFETY: the two calls above wrote every entry of `lt` and `rt`,
+        // among them their first ones, the children's.
+        let children = unsafe { (lt[0].assume_init_ref(), rt[0].assume_init_ref()) };
+        head[0].write(entry(node, Some(children)));
         return;
     }
     // Depth-first order puts every child after its parent: a reverse sweep
     // visits children first.
     for k in (0..t.len()).rev() {
         let n = &bin[base + k];
-        t[k] = if n.is_leaf() {
+        let e = if n.is_leaf() {
             entry(n, None)
         } else {
             let (l, r) = (k + 1, n.offset as usize - base);
-            entry(n, Some((&t[l], &t[r])))
+            // SAFETY: both children lie after `k` in this subtree's range
+            // (depth-first order), so the sweep wrote them already.
+            entry(n, Some(unsafe { (t[l].assume_init_ref(), t[r].assume_init_ref()) }))
         };
+        t[k].write(e);
     }
 }
 
 impl<'a> Plan<'a> {
     fn new(bin: &'a [Node]) -> Self {
-        let mut t = vec![EMPTY_ENTRY; bin.len()];
+        let mut t = Vec::with_capacity(bin.len());
         if !bin.is_empty() {
-            fill(bin, 0, &mut t);
+            fill(bin, 0, &mut t.spare_capacity_mut()[..bin.len()]);
+            // SAFETY: `fill` wrote all `bin.len()` entries (see there).
+            unsafe { t.set_len(bin.len()) };
         }
         Plan { bin, t }
     }
