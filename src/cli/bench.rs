@@ -292,6 +292,24 @@ pub fn print_mesh_race(m: &MeshRace, rounds: usize) {
             c.times.len()
         );
     }
+    let mut counts: Vec<usize> = m.contests.iter().map(|c| c.threads).filter(|&t| t > 1).collect();
+    counts.dedup();
+    for t in counts {
+        let opponents: Vec<&str> =
+            m.contests.iter().filter(|c| c.name == "build" && c.threads == t).map(|c| c.opponent.as_str()).collect();
+        let mut line = String::new();
+        for o in opponents {
+            if let Some((ours, theirs)) = m.build_scaling(o, t) {
+                if line.is_empty() {
+                    line = format!("rtdiff {ours:.2}x");
+                }
+                line.push_str(&format!(", {o} {theirs:.2}x"));
+            }
+        }
+        if !line.is_empty() {
+            println!("build scaling 1 -> {t} threads (median wall clock of 1 thread / of {t}): {line}");
+        }
+    }
     for (set, opp, a, b) in &m.hit_count_differences {
         println!("note: {} hits differ on {set} against {opp}: rtdiff {a}, Embree {b}", a.abs_diff(*b));
     }
@@ -376,6 +394,19 @@ pub fn print_goals(meshes: &[MeshRace], renders: &[SceneRace]) {
         1.0,
         worst(&|c| c.name.starts_with("batch") && c.opponent.contains("medium")),
     );
+    // Scaling of each contender's own builds; the goal's figure is rtdiff's
+    // scaling over the opponent's (at least 1: rtdiff scales as well).
+    let scaling = meshes
+        .iter()
+        .flat_map(|m| {
+            let opponents = m.contests.iter().filter(|c| c.name == "build" && c.threads == 2);
+            opponents.filter_map(move |c| {
+                let (ours, theirs) = m.build_scaling(&c.opponent, 2)?;
+                Some((ours / theirs, format!("{} build", m.mesh), c.opponent.clone()))
+            })
+        })
+        .min_by(|a, b| a.0.total_cmp(&b.0));
+    line("build: 2-thread scaling >= Embree's (rtdiff's / Embree's)", 1.0, scaling);
     let renders_worst = renders
         .iter()
         .flat_map(|s| &s.contests)

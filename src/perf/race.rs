@@ -34,7 +34,7 @@ use crate::backends::{EmbreeMode, EmbreeQuality};
 use crate::error::Result;
 use crate::geometry::{Primitives, Ray};
 
-use super::clock::quartiles;
+use super::clock::{median, quartiles};
 
 /// Rays per alternation between the tracers (256 KiB of rays, which stay in
 /// the second-level cache for all of them).
@@ -61,6 +61,10 @@ pub struct Contest {
     pub rays: usize,
     /// Per-round seconds, rtdiff then Embree.
     pub times: Vec<(f64, f64)>,
+    /// Builds only: per-round wall-clock seconds, rtdiff then Embree (with
+    /// one thread `times` holds CPU time; the wall clock compares thread
+    /// counts, [`MeshRace::build_scaling`]). Empty for ray sets.
+    pub walls: Vec<(f64, f64)>,
 }
 
 /// Summary of a contest: medians and the spread of the per-round ratio.
@@ -118,6 +122,28 @@ pub struct MeshRace {
     pub contests: Vec<Contest>,
     /// Workloads on which a tracer's hit count differs from rtdiff's: `(set, opponent, rtdiff, Embree)`.
     pub hit_count_differences: Vec<(String, String, usize, usize)>,
+}
+
+impl MeshRace {
+    /// How the builds scale from one thread to `threads`: the median
+    /// one-thread wall-clock build time over the median `threads`-thread
+    /// one, for rtdiff and for Embree mode `opponent` (each contender's own
+    /// ratio, so a shared machine's slow minutes slow both sides of it).
+    /// `None` when either thread count was not raced.
+    pub fn build_scaling(&self, opponent: &str, threads: usize) -> Option<(f64, f64)> {
+        let walls = |t: usize| {
+            self.contests
+                .iter()
+                .find(|c| c.name == "build" && c.opponent == opponent && c.threads == t && !c.walls.is_empty())
+                .map(|c| {
+                    let ours = median(c.walls.iter().map(|w| w.0).collect());
+                    let theirs = median(c.walls.iter().map(|w| w.1).collect());
+                    (ours, theirs)
+                })
+        };
+        let (one, many) = (walls(1)?, walls(threads)?);
+        Some((one.0 / many.0, one.1 / many.1))
+    }
 }
 
 /// What to race.
@@ -324,6 +350,7 @@ pub fn race_mesh(
                 threads,
                 rays: 0,
                 times: Vec::new(),
+                walls: Vec::new(),
             });
         }
         for (wname, rays, _, _) in &loads {
@@ -334,6 +361,7 @@ pub fn race_mesh(
                     threads,
                     rays: rays.len(),
                     times: Vec::new(),
+                    walls: Vec::new(),
                 });
             }
         }
@@ -341,28 +369,29 @@ pub fn race_mesh(
         for round in 0..opts.rounds {
             // Builds: rtdiff's sah + 8-wide collapse + packets on the pool,
             // each Embree mode on the device; construction only.
-            let mut ours_t = 0.0;
-            let mut theirs_t = vec![0.0; m];
+            let (mut ours_t, mut ours_w) = (0.0, 0.0);
+            let (mut theirs_t, mut theirs_w) = (vec![0.0; m], vec![0.0; m]);
             for k in run_order(m + 1, round, 0) {
                 if k == m {
-                    let (t, r) = pool.install(|| {
+                    let (t, w, r) = pool.install(|| {
                         let mut b = || build_tracer(prims.clone(), &cfg).map(|_| 0);
                         time_result(threads, &clock, &mut b)
                     });
                     r?;
-                    ours_t = t;
+                    (ours_t, ours_w) = (t, w);
                 } else {
                     let (q, md) = EMBREE_MODES[k];
-                    let (t, r) = pool.install(|| {
+                    let (t, w, r) = pool.install(|| {
                         let mut b = || EmbreeTracer::with_mode(&device, prims.clone(), q, md).map(|_| 0);
                         time_result(threads, &clock, &mut b)
                     });
                     r?;
-                    theirs_t[k] = t;
+                    (theirs_t[k], theirs_w[k]) = (t, w);
                 }
             }
             for k in 0..m {
                 contests[first + k].times.push((ours_t, theirs_t[k]));
+                contests[first + k].walls.push((ours_w, theirs_w[k]));
             }
             for (w, (wname, rays, any, batch)) in loads.iter().enumerate() {
                 let (mut ta, mut tb, mut ha, mut hb) = (0.0, vec![0.0; m], 0, vec![0; m]);
@@ -435,13 +464,16 @@ fn time_result(
     threads: usize,
     clock: &super::clock::Clock,
     f: &mut dyn FnMut() -> Result<usize>,
-) -> (f64, Result<usize>) {
+) -> (f64, f64, Result<usize>) {
+    let wall = std::time::Instant::now();
     if threads == 1 {
-        super::clock::cpu_seconds(f)
+        let (t, r) = super::clock::cpu_seconds(f);
+        (t, wall.elapsed().as_secs_f64(), r)
     } else {
         let s = clock.now();
         let r = f();
-        (clock.since(s), r)
+        let t = clock.since(s);
+        (t, t, r)
     }
 }
 

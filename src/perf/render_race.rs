@@ -105,7 +105,14 @@ pub fn race_scene(scene_path: &Path, opts: &RenderRaceOptions) -> Result<SceneRa
     let name = scene_path.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned());
     let mut contests = Vec::new();
     for &threads in &opts.threads {
-        let mut c = Contest { name: name.clone(), opponent: "embree".into(), threads, rays: 0, times: Vec::new() };
+        let mut c = Contest {
+            name: name.clone(),
+            opponent: "embree".into(),
+            threads,
+            rays: 0,
+            times: Vec::new(),
+            walls: Vec::new(),
+        };
         // One untimed render each first: page in the scene's textures and meshes for both.
         let warm = timed_render(&scene, &native, threads)?.max(timed_render(&scene, &embree, threads)?);
         for round in 0..rounds_for(opts.rounds, warm) {
