@@ -51,6 +51,32 @@ fn invalid_api_use_is_a_rust_error() {
     assert!(d.check("after the error was taken").is_ok());
 }
 
+#[test]
+fn memory_monitor_counts_a_scene_and_its_release() {
+    // 1,000 triangles: Embree's own copy of the geometry is exactly three
+    // float3 vertices and one uint3 index triple per triangle (48 bytes; the
+    // buffers may be padded by a few bytes), the BVH is more than nothing,
+    // and releasing the scene gives everything back.
+    let n = 1000;
+    let triangles = (0..n)
+        .map(|i| {
+            let o = Vec3::new(i as f32, (i % 7) as f32, (i % 13) as f32);
+            Triangle { v: [o, o + Vec3::X, o + Vec3::Y] }
+        })
+        .collect();
+    let prims = Arc::new(Primitives { triangles, spheres: Vec::new() });
+    let d = Device::new("threads=1").unwrap();
+    let start = d.memory_bytes();
+    let t = EmbreeTracer::with_mode(&d, prims, EmbreeQuality::Medium, rtdiff::embree::EmbreeMode::Robust).unwrap();
+    let m = t.scene().memory();
+    let exact = 48 * n as i64;
+    assert!((exact..exact + 4096).contains(&m.geometry_bytes), "geometry {} bytes for {n} triangles", m.geometry_bytes);
+    assert!(m.bvh_bytes >= 16 * n as i64, "BVH {} bytes for {n} triangles", m.bvh_bytes);
+    assert_eq!(d.memory_bytes(), start + m.geometry_bytes + m.bvh_bytes);
+    drop(t);
+    assert_eq!(d.memory_bytes(), start, "memory left after the scene was released");
+}
+
 fn one_triangle_and_sphere() -> Arc<Primitives> {
     let tri = Triangle { v: [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0)] };
     let sph = Sphere { center: Vec3::new(5.0, 0.0, 0.0), radius: 1.0 };

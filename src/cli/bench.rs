@@ -261,6 +261,16 @@ pub fn print_mesh_race(m: &MeshRace, rounds: usize) {
         m.embree_isa.name(),
         if m.embree_capped { " (capped by --embree-max-isa)" } else { " (the widest this CPU runs)" }
     );
+    if !m.embree_memory.is_empty() {
+        let theirs: Vec<String> =
+            m.embree_memory.iter().map(|e| format!("{} {:.1}", e.opponent, e.bvh_bytes_per_primitive)).collect();
+        let geometry = m.embree_memory.first().map_or(0.0, |e| e.geometry_bytes_per_primitive);
+        println!(
+            "memory per primitive: rtdiff tree {:.1} bytes; Embree acceleration structure {} bytes (and {geometry:.1} of geometry buffers)",
+            m.rtdiff_bytes_per_primitive,
+            theirs.join(", ")
+        );
+    }
     println!(
         "ratio = Embree time / rtdiff time in the same round (above 1: rtdiff faster); 1 thread: CPU time, more: wall clock"
     );
@@ -407,6 +417,20 @@ pub fn print_goals(meshes: &[MeshRace], renders: &[SceneRace]) {
         })
         .min_by(|a, b| a.0.total_cmp(&b.0));
     line("build: 2-thread scaling >= Embree's (rtdiff's / Embree's)", 1.0, scaling);
+    // Embree's bytes over rtdiff's (at least 1: rtdiff's tree is no larger).
+    let memory = meshes
+        .iter()
+        .flat_map(|m| {
+            m.embree_memory.iter().map(move |e| {
+                (
+                    e.bvh_bytes_per_primitive / m.rtdiff_bytes_per_primitive,
+                    format!("{} memory", m.mesh),
+                    e.opponent.clone(),
+                )
+            })
+        })
+        .min_by(|a, b| a.0.total_cmp(&b.0));
+    line("memory per primitive <= Embree's acceleration structure", 1.0, memory);
     let renders_worst = renders
         .iter()
         .flat_map(|s| &s.contests)

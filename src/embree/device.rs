@@ -1,6 +1,8 @@
 //! The Embree device: library instance, thread pool and error state.
 
-use std::ffi::{CStr, CString};
+use std::ffi::{CStr, CString, c_void};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicI64, Ordering};
 
 use crate::error::{Error, Result};
 
@@ -11,6 +13,22 @@ use super::ffi;
 #[derive(Debug)]
 pub struct Device {
     raw: ffi::RTCDevice,
+    /// Bytes the device holds, as its memory monitor reports them (shared by
+    /// every clone; the monitor's payload points at it).
+    memory: Arc<AtomicI64>,
+}
+
+/// The device's memory monitor: every allocation and release of the
+/// device's important memory blocks (buffers, BVH nodes and leaves, build
+/// scratch), added to the counter behind `user_ptr`. Embree may call it from
+/// its worker threads, hence the atomic. Never refuses an allocation.
+unsafe extern "C" fn count_memory(user_ptr: *mut c_void, bytes: isize, _post: bool) -> bool {
+    // SAFETY: `user_ptr` is the `AtomicI64` of an `Arc` that every clone of
+    // the device holds, and the last clone releases the device (which may
+    // call this) before its `Arc` is dropped.
+    let counter = unsafe { &*user_ptr.cast::<AtomicI64>() };
+    counter.fetch_add(bytes as i64, Ordering::Relaxed);
+    true
 }
 
 // SAFETY: Embree devices are internally synchronised; the API documents every
@@ -65,9 +83,21 @@ impl Device {
             take_error(std::ptr::null_mut(), &format!("creating a device with config {config:?}"))?;
             return Err(Error::Invalid(format!("Embree: creating a device with config {config:?} failed")));
         }
-        let dev = Self { raw };
+        let dev = Self { raw, memory: Arc::new(AtomicI64::new(0)) };
         dev.check(&format!("creating a device with config {config:?}"))?;
+        // SAFETY: live device; the payload outlives the device (see `count_memory`).
+        unsafe {
+            ffi::rtcSetDeviceMemoryMonitorFunction(raw, Some(count_memory), Arc::as_ptr(&dev.memory).cast_mut().cast());
+        }
+        dev.check("registering the memory monitor")?;
         Ok(dev)
+    }
+
+    /// Bytes of memory the device holds now (buffers, acceleration
+    /// structures, and any build scratch not yet released), as Embree's
+    /// memory monitor reports them.
+    pub fn memory_bytes(&self) -> i64 {
+        self.memory.load(Ordering::Relaxed)
     }
 
     /// The raw handle (valid while `self` lives).
@@ -94,7 +124,7 @@ impl Clone for Device {
     fn clone(&self) -> Self {
         // SAFETY: `raw` is live; the matching release happens in `Drop`.
         unsafe { ffi::rtcRetainDevice(self.raw) };
-        Self { raw: self.raw }
+        Self { raw: self.raw, memory: self.memory.clone() }
     }
 }
 

@@ -242,6 +242,10 @@ pub type RTCIntersectArgumentsPtr = *mut c_void;
 /// `typedef void (*RTCErrorFunction)(void* userPtr, enum RTCError code, const char* str)`.
 pub type RTCErrorFunction = Option<unsafe extern "C" fn(user_ptr: *mut c_void, code: i32, msg: *const c_char)>;
 
+/// `typedef bool (*RTCMemoryMonitorFunction)(void* userPtr, ssize_t bytes, bool post)`.
+pub type RTCMemoryMonitorFunction =
+    Option<unsafe extern "C" fn(user_ptr: *mut c_void, bytes: isize, post: bool) -> bool>;
+
 const _: () = assert!(std::mem::size_of::<RTCRay>() == 48 && std::mem::align_of::<RTCRay>() == 16);
 const _: () = assert!(std::mem::size_of::<RTCHit>() == 36 && std::mem::align_of::<RTCHit>() == 4);
 const _: () = assert!(std::mem::size_of::<RTCRayHit>() == 96 && std::mem::align_of::<RTCRayHit>() == 16);
@@ -264,6 +268,12 @@ unsafe extern "C" {
     pub fn rtcGetDeviceLastErrorMessage(device: RTCDevice) -> *const c_char;
     /// `rtcSetDeviceErrorFunction` (see the Embree 4 API documentation).
     pub fn rtcSetDeviceErrorFunction(device: RTCDevice, error: RTCErrorFunction, user_ptr: *mut c_void);
+    /// `rtcSetDeviceMemoryMonitorFunction` (see the Embree 4 API documentation).
+    pub fn rtcSetDeviceMemoryMonitorFunction(
+        device: RTCDevice,
+        monitor: RTCMemoryMonitorFunction,
+        user_ptr: *mut c_void,
+    );
     /// `rtcGetDeviceProperty` (see the Embree 4 API documentation).
     pub fn rtcGetDeviceProperty(device: RTCDevice, prop: i32) -> isize;
 

@@ -21,6 +21,6 @@ pub mod tracer;
 pub use device::Device;
 pub use quality::{EmbreeMode, EmbreeQuality, embree_label};
 #[cfg(feature = "embree")]
-pub use scene::Scene;
+pub use scene::{Scene, SceneMemory};
 #[cfg(feature = "embree")]
 pub use tracer::EmbreeTracer;

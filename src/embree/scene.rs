@@ -19,6 +19,19 @@ pub struct Scene {
     raw: ffi::RTCScene,
     device: Device,
     quality: i32,
+    memory: SceneMemory,
+}
+
+/// What a scene's construction added to its device's memory (Embree's memory
+/// monitor, [`Device::memory_bytes`]; exact when no other scene of the device
+/// is built or released meanwhile).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SceneMemory {
+    /// The geometry buffers (Embree's own copy of the vertices and indices).
+    pub geometry_bytes: i64,
+    /// What `rtcCommitScene` kept: the acceleration structure (nodes and leaf
+    /// primitives), net of the scratch the build released.
+    pub bvh_bytes: i64,
 }
 
 // SAFETY: a committed scene is only read (rtcIntersect1 / rtcOccluded1 /
@@ -63,6 +76,7 @@ impl Scene {
         if nt > (u32::MAX / 3) as usize || ns >= u32::MAX as usize {
             return Err(Error::Invalid(format!("too many primitives for Embree ({nt} triangles, {ns} spheres)")));
         }
+        let start = device.memory_bytes();
         // SAFETY: `device.raw()` is a live device.
         let raw = unsafe { ffi::rtcNewScene(device.raw()) };
         device.check("creating a scene")?;
@@ -70,7 +84,8 @@ impl Scene {
             return Err(Error::Invalid("Embree: rtcNewScene returned NULL".into()));
         }
         // Keep our own reference to the device for error checks.
-        let scene = Self { raw, device: device.clone(), quality: quality_code(quality) };
+        let mut scene =
+            Self { raw, device: device.clone(), quality: quality_code(quality), memory: SceneMemory::default() };
         // SAFETY: `raw` is a live, uncommitted scene; flag and quality are valid enum values.
         unsafe {
             let flags = match mode {
@@ -87,9 +102,11 @@ impl Scene {
         if ns > 0 {
             scene.attach_spheres(prims)?;
         }
+        let attached = device.memory_bytes();
         // SAFETY: `raw` is a live scene whose geometries are committed.
         unsafe { ffi::rtcCommitScene(raw) };
         device.check("committing the scene (BVH build)")?;
+        scene.memory = SceneMemory { geometry_bytes: attached - start, bvh_bytes: device.memory_bytes() - attached };
         Ok(scene)
     }
 
@@ -164,6 +181,11 @@ impl Scene {
     /// The raw handle (valid while `self` lives).
     pub fn raw(&self) -> ffi::RTCScene {
         self.raw
+    }
+
+    /// What building the scene added to its device's memory.
+    pub fn memory(&self) -> SceneMemory {
+        self.memory
     }
 
     /// The device the scene was built on.

@@ -111,6 +111,9 @@ pub struct MeshRace {
     pub triangle_test: crate::geometry::TriangleTest,
     /// Bytes of rtdiff's tree (nodes and leaf packets) per primitive.
     pub rtdiff_bytes_per_primitive: f64,
+    /// What each Embree mode's scene holds per primitive (its memory monitor;
+    /// the one-thread builds), beside rtdiff's tree.
+    pub embree_memory: Vec<EmbreeMemory>,
     /// The instruction set of rtdiff's traversal: `avx2` (AVX2 and FMA,
     /// [`crate::bvh::WideBvh::uses_avx2`]) or `portable`.
     pub rtdiff_isa: String,
@@ -122,6 +125,20 @@ pub struct MeshRace {
     pub contests: Vec<Contest>,
     /// Workloads on which a tracer's hit count differs from rtdiff's: `(set, opponent, rtdiff, Embree)`.
     pub hit_count_differences: Vec<(String, String, usize, usize)>,
+}
+
+/// Memory of one Embree mode's scene per primitive, from Embree's memory
+/// monitor ([`crate::embree::SceneMemory`]).
+#[derive(Clone, Debug, Serialize)]
+pub struct EmbreeMemory {
+    /// The Embree mode's label.
+    pub opponent: String,
+    /// The acceleration structure (nodes and leaf primitives): what compares
+    /// with rtdiff's tree, whose leaf packets also hold the vertices.
+    pub bvh_bytes_per_primitive: f64,
+    /// Embree's copy of the geometry (vertex and index buffers), which a
+    /// scene keeps beside its acceleration structure.
+    pub geometry_bytes_per_primitive: f64,
 }
 
 impl MeshRace {
@@ -309,6 +326,7 @@ pub fn race_mesh(
     let mut contests = Vec::new();
     let mut hit_count_differences = Vec::new();
     let mut bytes = 0.0;
+    let mut embree_memory = Vec::new();
     let mut isa = "portable";
     let mut rtdiff = String::new();
     for &threads in &opts.threads {
@@ -342,6 +360,21 @@ pub fn race_mesh(
             .map(|&(q, m)| EmbreeTracer::with_mode(&device, prims.clone(), q, m))
             .collect::<Result<_>>()?;
         let names: Vec<String> = EMBREE_MODES.iter().map(|&(q, m)| embree_label(q, m)).collect();
+        if embree_memory.is_empty() {
+            let per = |b: i64| b as f64 / prims.len().max(1) as f64;
+            embree_memory = names
+                .iter()
+                .zip(&theirs)
+                .map(|(name, t)| {
+                    let m = t.scene().memory();
+                    EmbreeMemory {
+                        opponent: name.clone(),
+                        bvh_bytes_per_primitive: per(m.bvh_bytes),
+                        geometry_bytes_per_primitive: per(m.geometry_bytes),
+                    }
+                })
+                .collect();
+        }
         let first = contests.len();
         for name in &names {
             contests.push(Contest {
@@ -428,6 +461,7 @@ pub fn race_mesh(
         rtdiff,
         triangle_test: opts.triangle_test,
         rtdiff_bytes_per_primitive: bytes,
+        embree_memory,
         rtdiff_isa: isa.to_string(),
         embree_isa: EmbreeIsa::running(opts.embree_max_isa),
         embree_capped: opts.embree_max_isa.is_some_and(|m| m < EmbreeIsa::widest_on_this_cpu()),
