@@ -128,7 +128,7 @@ pub struct MeshRace {
 }
 
 /// Memory of one Embree mode's scene per primitive, from Embree's memory
-/// monitor ([`crate::embree::SceneMemory`]).
+/// monitor (`embree::SceneMemory`, with the `embree` feature).
 #[derive(Clone, Debug, Serialize)]
 pub struct EmbreeMemory {
     /// The Embree mode's label.
