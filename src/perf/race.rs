@@ -112,7 +112,7 @@ pub struct MeshRace {
     /// Bytes of rtdiff's tree (nodes and leaf packets) per primitive.
     pub rtdiff_bytes_per_primitive: f64,
     /// What each Embree mode's scene holds per primitive (its memory monitor;
-    /// the one-thread builds), beside rtdiff's tree.
+    /// the builds of the first thread count raced), beside rtdiff's tree.
     pub embree_memory: Vec<EmbreeMemory>,
     /// The instruction set of rtdiff's traversal: `avx2` (AVX2 and FMA,
     /// [`crate::bvh::WideBvh::uses_avx2`]) or `portable`.
@@ -492,7 +492,8 @@ fn run_order(n: usize, round: usize, part: usize) -> Vec<usize> {
     order
 }
 
-/// Time `f` with the race's clock for `threads`.
+/// Time `f` with the race's clock for `threads` (the thread's CPU time for
+/// one thread, the wall clock for more), and by the wall clock as well.
 #[cfg(feature = "embree")]
 fn time_result(
     threads: usize,
