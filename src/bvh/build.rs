@@ -328,9 +328,31 @@ fn build_node(
 }
 
 /// Append a subtree built with local node indices, shifting its child links.
+///
+/// Large subtrees are copied in parallel pieces of [`PARALLEL_PASS`] nodes:
+/// the copies at the top forks come last in the build, with the other thread
+/// idle, and they write memory no one has touched yet (its page faults
+/// included). dragon_full on two threads, a throwaway timer: the root's copy
+/// (184,000 nodes) took 3.2-3.4 ms and those one level down up to 3.0 ms.
 fn append_shifted(out: &mut Vec<Node>, sub: &[Node]) {
     let base = out.len() as u32;
-    out.extend(sub.iter().map(|n| if n.is_leaf() { *n } else { Node { offset: n.offset + base, ..*n } }));
+    let shifted = |n: &Node| if n.is_leaf() { *n } else { Node { offset: n.offset + base, ..*n } };
+    if !parallel_pass(sub.len()) {
+        out.extend(sub.iter().map(shifted));
+        return;
+    }
+    out.reserve(sub.len());
+    let start = out.len();
+    out.spare_capacity_mut()[..sub.len()].par_chunks_mut(PARALLEL_PASS).zip(sub.par_chunks(PARALLEL_PASS)).for_each(
+        |(dst, src)| {
+            for (d, n) in dst.iter_mut().zip(src) {
+                d.write(shifted(n));
+            }
+        },
+    );
+    // SAFETY: the `sub.len()` slots after `start` were reserved above, and the
+    // pieces, cut alike from them and from `sub`, wrote every one.
+    unsafe { out.set_len(start + sub.len()) };
 }
 
 /// Move the entries of `idx` satisfying `left` to the front; returns how many there are.
