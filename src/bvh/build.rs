@@ -350,6 +350,9 @@ fn append_shifted(out: &mut Vec<Node>, sub: &[Node]) {
             }
         },
     );
+    // (rayon's `par_extend` over `sub.par_iter().with_min_len(..).map(..)`
+    // does the same without `unsafe`, but measured slower: dragon_full's
+    // two-thread build-cold 117.0-131.6 -> 122.2-146.6 ms, four alternated pairs.)
     // SAFETY: the `sub.len()` slots after `start` were reserved above, and the
     // pieces, cut alike from them and from `sub`, wrote every one.
     unsafe { out.set_len(start + sub.len()) };
