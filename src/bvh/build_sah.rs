@@ -4,7 +4,7 @@
 //! `C_trav + C_isect * (A_l B(N_l) + A_r B(N_r)) / A` with `A` the box *surface
 //! area* (the probability that a ray through the parent also crosses the
 //! child, for uniformly distributed rays) and `B(N)` the primitive count
-//! rounded up to whole leaf packets of [`BLOCK`]. A node becomes a leaf when
+//! rounded up to whole leaf tests of [`SahSplit::block`] triangles. A node becomes a leaf when
 //! no split beats its leaf cost `C_isect * B(N)` and it holds at most
 //! [`SAH_MAX_LEAF`] primitives. The bins of a node are held bin-major with the
 //! three axes side by side, so the sweep evaluates the three axes at once.
@@ -21,7 +21,8 @@ use super::build::{BinaryBvh, BoxA, BuildInput, PrimRef, Split, Splitter, build_
 pub const TRAVERSAL_COST: f32 = 1.0;
 /// Cost of one primitive slot of a leaf. The `fast` path tests a leaf's
 /// triangles in 4-wide packets, so a leaf of `n` primitives costs
-/// `ceil(n / BLOCK) * BLOCK` slots (as Embree's builders count them): a
+/// `ceil(n / block) * block` slots (as Embree's builders count them; `block`
+/// is 4, or 8 in large meshes, [`crate::bvh::packet::leaf_block`]): a
 /// packet costs `4 * 0.5 = 2` binary-node visits, about two thirds of one
 /// 8-wide node visit (which stands for three binary levels).
 ///
@@ -30,8 +31,6 @@ pub const TRAVERSAL_COST: f32 = 1.0;
 /// packet tests per ray fell from 3.15 to 3.04 (primary) and from 6.77 to
 /// 6.50 (incoherent), with 1.04 instead of 1.5 packets per leaf visited.
 pub const INTERSECTION_COST: f32 = 0.5;
-/// Primitives per leaf packet of the `fast` traversal (the leaf-cost block).
-pub const BLOCK: usize = 4;
 /// Nodes with more primitives than this are always split.
 pub const SAH_MAX_LEAF: usize = 8;
 /// Deepest level; only reachable on pathological input (the node then stays a large leaf).
@@ -43,6 +42,10 @@ pub const SAH_MAX_BINS: usize = 256;
 pub struct SahSplit {
     /// Bins per axis (clamped to `2..=SAH_MAX_BINS`).
     pub bins: usize,
+    /// Triangles per leaf test, a power of two ([`crate::bvh::packet::leaf_block`]):
+    /// leaf counts are rounded up to it, and nodes of at most this many
+    /// primitives are leaves outright.
+    pub block: u32,
 }
 
 /// Bin of centroid `c` on every axis: `trunc(min((c - cmin) * scale, last))`,
@@ -79,7 +82,7 @@ impl Splitter for SahSplit {
         _depth: u32,
     ) -> Option<Split> {
         let n = idx.len();
-        if n <= BLOCK {
+        if n <= self.block as usize {
             // One leaf packet either way: splitting cannot save a packet test.
             // (On dragon_87k the traversal counts are unchanged by this
             // shortcut, and the build runs 10% fewer instructions.)
@@ -156,22 +159,21 @@ fn grow<T: Copy>(v: &mut Vec<T>, n: usize, value: T) {
     }
 }
 
-/// Primitive slots a leaf of `n` primitives costs: `n` rounded up to whole packets of [`BLOCK`].
-pub fn leaf_slots(n: usize) -> usize {
-    n.div_ceil(BLOCK) * BLOCK
+/// Primitive slots a leaf of `n` primitives costs: `n` rounded up to whole
+/// tests of `block` triangles.
+pub fn leaf_slots(n: usize, block: u32) -> usize {
+    n.div_ceil(block as usize) * block as usize
 }
 
-/// `n` rounded up to whole blocks of [`BLOCK`], per lane, as floats.
+/// `n` rounded up to whole blocks of `1 << shift`, per lane, as floats.
 ///
 /// Converted as signed integers (one instruction; SSE2 has no unsigned
 /// conversion, which took eight): a count is at most a node's references,
 /// below 2^31 for any mesh that fits in memory (2^31 references take 64 GiB),
 /// and a count beyond would only misprice a split, not change an answer.
 #[inline(always)]
-fn block_slots(n: UVec4) -> Vec3A {
-    const { assert!(BLOCK.is_power_of_two()) };
-    let shift = BLOCK.trailing_zeros();
-    Vec3A::from_vec4((((n + UVec4::splat(BLOCK as u32 - 1)) >> shift) << shift).as_ivec4().as_vec4())
+fn block_slots(n: UVec4, shift: u32) -> Vec3A {
+    Vec3A::from_vec4((((n + UVec4::splat((1 << shift) - 1)) >> shift) << shift).as_ivec4().as_vec4())
 }
 
 /// Three boxes (one bin of each axis) transposed: `lo[c]` and `hi[c]` hold
@@ -309,6 +311,7 @@ impl SahSplit {
     ) -> Option<Split> {
         let n = idx.len();
         let last = nb as u32 - 1;
+        let shift = self.block.trailing_zeros();
         let Scratch { bins, soa, right_area, right_count, bins2 } = scratch;
         // The bins are accumulated into, so they start empty; the sweep
         // arrays are written before they are read and only need the room.
@@ -365,7 +368,7 @@ impl SahSplit {
             run = run.union(t);
             rn += b.count;
             *ra = run.half_area();
-            *rc = block_slots(rn);
+            *rc = block_slots(rn, shift);
         }
         // Axes whose centroids all coincide cannot be split.
         let axis_ok = scale.cmpgt(Vec3A::ZERO);
@@ -378,7 +381,7 @@ impl SahSplit {
         for ((t, b), (&ra, &rb)) in soa.iter().zip(bins.iter()).zip(right_area.iter().zip(right_count.iter()).skip(1)) {
             run = run.union(t);
             ln += b.count;
-            let lb = block_slots(ln);
+            let lb = block_slots(ln, shift);
             let cost = run.half_area() * lb + ra * rb;
             // Both sides non-empty, and strictly cheaper: the first minimum per axis wins.
             let better = cost.cmplt(best_cost) & axis_ok & lb.cmpgt(Vec3A::ZERO) & rb.cmpgt(Vec3A::ZERO);
@@ -400,7 +403,7 @@ impl SahSplit {
         let s = best_bin[axis] as usize;
         let area = bounds.surface_area() * 0.5;
         let split_cost = TRAVERSAL_COST * area + INTERSECTION_COST * cost;
-        let leaf_cost = INTERSECTION_COST * leaf_slots(n) as f32 * area;
+        let leaf_cost = INTERSECTION_COST * leaf_slots(n, self.block) as f32 * area;
         if n <= SAH_MAX_LEAF && split_cost >= leaf_cost {
             return None;
         }
@@ -418,12 +421,12 @@ impl SahSplit {
         debug_assert_eq!(i, nl);
         // The children's centroid boxes are left to the children (one
         // read-only pass each, `centroid_bounds_of`, and none for a child of
-        // at most `BLOCK` references, which becomes a leaf before needing it).
+        // at most `block` references, which becomes a leaf before needing it).
         Some(Split { mid: nl, bounds: Some((lb, rb)) })
     }
 }
 
 /// Build with the binned SAH.
 pub fn build(prims: &Primitives, bins: usize) -> BinaryBvh {
-    build_with(prims, &SahSplit { bins }, Builder::Sah)
+    build_with(prims, &SahSplit { bins, block: crate::bvh::packet::leaf_block(prims.len()) }, Builder::Sah)
 }

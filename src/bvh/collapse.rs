@@ -19,12 +19,12 @@
 use std::mem::MaybeUninit;
 
 use super::Node;
-use super::packet::packets_for;
 use super::wide::{WIDTH, WideNode};
 
 /// Cost of visiting one wide node per unit of (half) surface area.
 pub const NODE_COST: f32 = 1.0;
-/// Cost of testing one leaf packet (four triangles), relative to [`NODE_COST`].
+/// Cost of one leaf test (a block of four or eight triangles, see
+/// [`super::packet::leaf_block`]), relative to [`NODE_COST`].
 ///
 /// Measured with `rtdiff bench --race` on dragon_87k (ratios to Embree in
 /// the same rounds, two runs each): 0.67, 1.0, 1.5 and 2.0 all gave primary
@@ -82,17 +82,18 @@ fn half_area(n: &Node) -> f32 {
 }
 
 /// The entry of binary node `node` from its children's entries (`None` for a leaf).
-fn entry(node: &Node, children: Option<(&Entry, &Entry)>) -> Entry {
+/// `block`: triangles per leaf test.
+fn entry(node: &Node, children: Option<(&Entry, &Entry)>, block: u32) -> Entry {
     let area = half_area(node);
     let Some((l, r)) = children else {
-        let c = PACKET_COST * packets_for(node.count) as f32 * area;
+        let c = PACKET_COST * node.count.div_ceil(block) as f32 * area;
         return Entry { cost: [c; WIDTH + 1], split: [0; WIDTH + 1], as_leaf: true, range: (node.offset, node.count) };
     };
     let range = (l.range.0, l.range.1 + r.range.1);
     let (dist, split) = both_children(&l.cost, &r.cost);
     let as_node = NODE_COST * area + dist[WIDTH];
     let count = range.1;
-    let as_leaf = if count <= MAX_LEAF { PACKET_COST * packets_for(count) as f32 * area } else { f32::INFINITY };
+    let as_leaf = if count <= MAX_LEAF { PACKET_COST * count.div_ceil(block) as f32 * area } else { f32::INFINITY };
     let mut row = [0.0; WIDTH + 1];
     row[1] = as_leaf.min(as_node);
     for i in 2..=WIDTH {
@@ -187,17 +188,17 @@ fn both_children(cl: &Row, cr: &Row) -> (Row, [u8; WIDTH + 1]) {
 /// subtrees of a large node in parallel. Every entry is written exactly
 /// once, each after its children's: the table needs no initialisation (its
 /// pages are first touched here, by both threads of a parallel fill).
-fn fill(bin: &[Node], base: usize, t: &mut [MaybeUninit<Entry>]) {
+fn fill(bin: &[Node], base: usize, t: &mut [MaybeUninit<Entry>], block: u32) {
     let node = &bin[base];
     if !node.is_leaf() && t.len() >= FILL_PARALLEL_THRESHOLD && rayon::current_num_threads() > 1 {
         let right = node.offset as usize;
         let (head, rest) = t.split_at_mut(1);
         let (lt, rt) = rest.split_at_mut(right - base - 1);
-        rayon::join(|| fill(bin, base + 1, lt), || fill(bin, right, rt));
+        rayon::join(|| fill(bin, base + 1, lt, block), || fill(bin, right, rt, block));
         // SAFETY: the two calls above wrote every entry of `lt` and `rt`,
         // among them their first ones, the children's.
         let children = unsafe { (lt[0].assume_init_ref(), rt[0].assume_init_ref()) };
-        head[0].write(entry(node, Some(children)));
+        head[0].write(entry(node, Some(children), block));
         return;
     }
     // Depth-first order puts every child after its parent: a reverse sweep
@@ -205,22 +206,22 @@ fn fill(bin: &[Node], base: usize, t: &mut [MaybeUninit<Entry>]) {
     for k in (0..t.len()).rev() {
         let n = &bin[base + k];
         let e = if n.is_leaf() {
-            entry(n, None)
+            entry(n, None, block)
         } else {
             let (l, r) = (k + 1, n.offset as usize - base);
             // SAFETY: both children lie after `k` in this subtree's range
             // (depth-first order), so the sweep wrote them already.
-            entry(n, Some(unsafe { (t[l].assume_init_ref(), t[r].assume_init_ref()) }))
+            entry(n, Some(unsafe { (t[l].assume_init_ref(), t[r].assume_init_ref()) }), block)
         };
         t[k].write(e);
     }
 }
 
 impl<'a> Plan<'a> {
-    fn new(bin: &'a [Node]) -> Self {
+    fn new(bin: &'a [Node], block: u32) -> Self {
         let mut t = Vec::with_capacity(bin.len());
         if !bin.is_empty() {
-            fill(bin, 0, &mut t.spare_capacity_mut()[..bin.len()]);
+            fill(bin, 0, &mut t.spare_capacity_mut()[..bin.len()], block);
             // SAFETY: `fill` wrote all `bin.len()` entries (see there).
             unsafe { t.set_len(bin.len()) };
         }
@@ -369,11 +370,12 @@ impl Lanes {
 
 /// Collapse binary `bin` (depth-first, as the builders make it) into wide
 /// nodes, depth-first; node 0 is the root. Empty for an empty tree. The
-/// result does not depend on the number of threads.
-pub fn collapse(bin: &[Node]) -> Vec<WideNode> {
+/// result does not depend on the number of threads. `block`: triangles per
+/// leaf test in the cost model ([`super::packet::leaf_block`]).
+pub fn collapse(bin: &[Node], block: u32) -> Vec<WideNode> {
     let mut out = super::huge::vec_with_capacity(bin.len() / 4 + 1);
     if !bin.is_empty() {
-        Plan::new(bin).build_node(0, &mut out);
+        Plan::new(bin, block).build_node(0, &mut out);
     }
     out
 }
@@ -489,7 +491,7 @@ mod tests {
             let prims = scattered(n, n as u64);
             let cfg = AccelConfig { builder, ..Default::default() };
             let bin = crate::bvh::build_binary(&prims, &cfg);
-            let wide = collapse(&bin.nodes);
+            let wide = collapse(&bin.nodes, crate::bvh::packet::leaf_block(prims.len()));
             check(&wide, &bin.nodes, n);
         }
     }
@@ -502,7 +504,7 @@ mod tests {
         let prims = scattered(4096, 9);
         let cfg = AccelConfig { builder: Builder::Median, ..Default::default() };
         let bin = crate::bvh::build_binary(&prims, &cfg);
-        let wide = collapse(&bin.nodes);
+        let wide = collapse(&bin.nodes, crate::bvh::packet::leaf_block(prims.len()));
         let lanes: usize = wide.iter().map(WideNode::used).sum();
         assert!(lanes as f64 / wide.len() as f64 > 4.0, "mean fill {}", lanes as f64 / wide.len() as f64);
         let max_leaf = wide.iter().flat_map(|w| w.count).max().unwrap_or(0);

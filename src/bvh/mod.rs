@@ -49,22 +49,22 @@ use crate::geometry::{Hit, Primitives, Ray, TriangleKernel};
 /// (`leaf_size` for `median`, `bins` for `sah`).
 pub fn build_binary(prims: &Primitives, cfg: impl Into<BvhConfig>) -> BinaryBvh {
     let cfg = cfg.into();
-    build::build_with(prims, splitter(&cfg).as_ref(), cfg.builder)
+    build::build_with(prims, splitter(&cfg, prims.len()).as_ref(), cfg.builder)
 }
 
-/// The split strategy of `cfg`'s builder.
-fn splitter(cfg: &BvhConfig) -> Box<dyn build::Splitter> {
+/// The split strategy of `cfg`'s builder for a tree over `prims` primitives.
+fn splitter(cfg: &BvhConfig, prims: usize) -> Box<dyn build::Splitter> {
     match cfg.builder {
         Builder::Median => Box::new(build_median::MedianSplit { leaf_size: cfg.leaf_size }),
         Builder::SahVolume => Box::new(build_sah_volume::VolumeSplit),
-        Builder::Sah => Box::new(build_sah::SahSplit { bins: cfg.bins }),
+        Builder::Sah => Box::new(build_sah::SahSplit { bins: cfg.bins, block: packet::leaf_block(prims) }),
     }
 }
 
 /// Build the tree `cfg` asks for and collapse it into the 8-wide BVH of the
 /// `fast` traversal, gathering the leaves' triangles straight into packets.
 pub fn build_wide(prims: &Primitives, cfg: impl Into<BvhConfig>) -> WideBvh {
-    WideBvh::from_tree(prims, &build::build_tree(prims, splitter(&cfg.into()).as_ref()))
+    WideBvh::from_tree(prims, &build::build_tree(prims, splitter(&cfg.into(), prims.len()).as_ref()))
 }
 
 /// Build the binary BVH `cfg` asks for and its 8-wide collapse, and gather

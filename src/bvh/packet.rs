@@ -110,29 +110,38 @@ pub fn leaf_packet(first: u32, count: u32, c: usize, tri: &impl Fn(usize) -> ([V
     p
 }
 
+/// Meshes of at least this many primitives get trees whose leaves are priced
+/// as tests of eight triangles ([`leaf_block`]); smaller ones, of four.
+///
+/// A leaf of five to eight triangles takes one eight-lane test (`tri8_avx`)
+/// in the single-ray walks, about what a four-lane one costs, so pricing
+/// leaves by eight gives shallower trees with fuller leaves (dragon_87k:
+/// 4,077 -> 2,437 wide nodes; incoherent rays 5.11 -> 4.87 node visits and
+/// 1.26 -> 1.15 leaf tests). The batch walks test a leaf one triangle
+/// against all their rays at a time, where fuller leaves cost more: measured
+/// with `rtdiff bench --race 5 --threads 1`, old and new trees alternated,
+/// ratios against Embree's default mode, batch shadow rays went 0.89-0.94 ->
+/// 0.78-0.79 on suzanne (968 triangles), 1.22-1.23 -> 1.03-1.08 on bunny
+/// (3,674), 1.06 -> 0.99 on dragon_res4 (11,102), 1.21 -> 1.20-1.22 on
+/// dragon_res3 (47,794), 1.14-1.16 -> 1.14-1.18 on dragon_87k, and whole
+/// renders of the Cornell boxes (a few dozen triangles, lit by area lights)
+/// lost 10-25%, while single rays gained on every mesh (shadow rays 5-12%).
+/// Above this size the batches no longer lose and single rays gain most
+/// (dragon_full incoherent 0.963-0.968 -> 1.019-1.020).
+pub const WIDE_LEAVES_FROM: usize = 1 << 15;
+
+/// Triangles one leaf test covers in the cost model of a tree over `prims`
+/// primitives (the block the SAH builder and the collapse round leaves up
+/// to): eight from [`WIDE_LEAVES_FROM`] primitives, else four. Either way the
+/// walks test a leaf's packets two at a time.
+pub fn leaf_block(prims: usize) -> u32 {
+    if prims >= WIDE_LEAVES_FROM { 2 * PW as u32 } else { PW as u32 }
+}
+
 /// Packets holding `count` triangles.
 #[inline(always)]
 pub fn packets_for(count: u32) -> usize {
     (count as usize).div_ceil(PW)
-}
-
-/// Offer the hits of packet `$p`'s lanes in `$mask`, in lane (slot) order,
-/// setting `$changed` when `$best` changes. `offer` compares each hit with the best so
-/// far, which gives the scalar loop's answer (that loop tests later slots
-/// against the interval the earlier hits shortened, a comparison `offer`
-/// repeats). A macro that sets the caller's flag: a form that returned the
-/// flag (function or macro) changed the walks' code generation and cost 0.7%
-/// (watertight) to 4% (Moller-Trumbore) more instructions per suzanne
-/// incoherent ray (callgrind).
-macro_rules! offer_lanes {
-    ($changed:ident, $best:expr, $ray:expr, $p:expr, $mask:expr, $t:expr, $u:expr, $v:expr) => {{
-        let mut mask = $mask;
-        while mask != 0 {
-            let l = mask.trailing_zeros() as usize;
-            mask &= mask - 1;
-            $changed |= offer($best, $ray, $t[l], $p.id[l], $u[l], $v[l]);
-        }
-    }};
 }
 
 impl TriPackets {
@@ -205,7 +214,8 @@ impl TriPackets {
     }
 
     /// SIMD watertight closest-hit test of a leaf; same results as
-    /// [`Self::intersect_leaf_scalar`] with the watertight test.
+    /// [`Self::intersect_leaf_scalar`] with the watertight test. Called from
+    /// the AVX2 walks only (its packets go two at a time through `tri8_avx`).
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     pub fn intersect_leaf_simd(
@@ -216,46 +226,41 @@ impl TriPackets {
         lr: &LeafRay,
         best: &mut Option<Hit>,
     ) -> bool {
-        use std::arch::x86_64::*;
         let mut changed = false;
-        for p in &self.packets[first as usize..first as usize + packets_for(count)] {
-            let (ok, zero, t, u, v) = tri4_sse(p, ray, lr);
-            let mut zero = zero;
+        for pq in self.packets[first as usize..first as usize + packets_for(count)].chunks(2) {
+            let (ok, mut zero, [t, u, v]) = watertight_pair(pq, ray, lr);
             while zero != 0 {
                 let l = zero.trailing_zeros() as usize;
                 zero &= zero - 1;
-                if let Some((t, u, v)) = watertight(ray, &lr.wr, p.vertex(0, l), p.vertex(1, l), p.vertex(2, l)) {
-                    changed |= offer(best, ray, t, p.id[l], u, v);
+                let (p, k) = (&pq[l / PW], l % PW);
+                if let Some((t, u, v)) = watertight(ray, &lr.wr, p.vertex(0, k), p.vertex(1, k), p.vertex(2, k)) {
+                    changed |= offer(best, ray, t, p.id[k], u, v);
                 }
             }
-            if ok != 0 {
-                let (mut ts, mut us, mut vs) = ([0.0f32; PW], [0.0f32; PW], [0.0f32; PW]);
-                // SAFETY: SSE is part of the x86_64 baseline; each array has
-                // room for 4 floats and storeu has no alignment requirement.
-                unsafe {
-                    _mm_storeu_ps(ts.as_mut_ptr(), t);
-                    _mm_storeu_ps(us.as_mut_ptr(), u);
-                    _mm_storeu_ps(vs.as_mut_ptr(), v);
-                }
-                offer_lanes!(changed, best, ray, p, ok, ts, us, vs);
+            let mut ok = ok;
+            while ok != 0 {
+                let l = ok.trailing_zeros() as usize;
+                ok &= ok - 1;
+                changed |= offer(best, ray, t[l], pq[l / PW].id[l % PW], u[l], v[l]);
             }
         }
         changed
     }
 
-    /// SIMD watertight any-hit test of a leaf.
+    /// SIMD watertight any-hit test of a leaf (from the AVX2 walks only).
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     pub fn occluded_leaf_simd(&self, first: u32, count: u32, ray: &Ray, lr: &LeafRay) -> bool {
-        for p in &self.packets[first as usize..first as usize + packets_for(count)] {
-            let (ok, mut zero, _, _, _) = tri4_sse(p, ray, lr);
+        for pq in self.packets[first as usize..first as usize + packets_for(count)].chunks(2) {
+            let (ok, mut zero, _) = watertight_pair(pq, ray, lr);
             if ok != 0 {
                 return true;
             }
             while zero != 0 {
                 let l = zero.trailing_zeros() as usize;
                 zero &= zero - 1;
-                if watertight(ray, &lr.wr, p.vertex(0, l), p.vertex(1, l), p.vertex(2, l)).is_some() {
+                let (p, k) = (&pq[l / PW], l % PW);
+                if watertight(ray, &lr.wr, p.vertex(0, k), p.vertex(1, k), p.vertex(2, k)).is_some() {
                     return true;
                 }
             }
@@ -270,18 +275,24 @@ impl TriPackets {
     #[inline(always)]
     pub fn intersect_leaf_simd_mt(&self, first: u32, count: u32, ray: &mut Ray, best: &mut Option<Hit>) -> bool {
         let mut changed = false;
-        for p in &self.packets[first as usize..first as usize + packets_for(count)] {
-            let (ok, t, u, v) = tri4_mt_sse(p, ray);
-            offer_lanes!(changed, best, ray, p, ok, t, u, v);
+        for pq in self.packets[first as usize..first as usize + packets_for(count)].chunks(2) {
+            let (mut ok, [t, u, v]) = moller_trumbore_pair(pq, ray);
+            while ok != 0 {
+                let l = ok.trailing_zeros() as usize;
+                ok &= ok - 1;
+                changed |= offer(best, ray, t[l], pq[l / PW].id[l % PW], u[l], v[l]);
+            }
         }
         changed
     }
 
-    /// SIMD Moller-Trumbore any-hit test of a leaf.
+    /// SIMD Moller-Trumbore any-hit test of a leaf (from the AVX2 walks only).
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     pub fn occluded_leaf_simd_mt(&self, first: u32, count: u32, ray: &Ray) -> bool {
-        self.packets[first as usize..first as usize + packets_for(count)].iter().any(|p| tri4_mt_sse(p, ray).0 != 0)
+        self.packets[first as usize..first as usize + packets_for(count)]
+            .chunks(2)
+            .any(|pq| moller_trumbore_pair(pq, ray).0 != 0)
     }
 }
 
@@ -290,6 +301,87 @@ impl TriPackets {
 #[inline(always)]
 fn offer(best: &mut Option<Hit>, ray: &mut Ray, t: f32, id: u32, u: f32, v: f32) -> bool {
     Hit::offer(best, ray, Hit { t, prim: id, u, v })
+}
+
+/// The watertight test's arithmetic on a vector of lanes (four or eight), one
+/// triangle per lane, written once for [`tri4_sse`] and [`tri8_avx`]: `$v`
+/// is the vector type, `$ld(j, axis)` loads row `axis` of vertex `j` on the
+/// permuted axes, `$lane(i)` broadcasts lane row `i` of the [`LeafRay`], and
+/// the remaining arguments are the vector width's intrinsics. Evaluates to
+/// `(hit mask, uncertain mask, t, u, v)` (see [`tri4_sse`]); returns early
+/// from the enclosing function when no lane is a hit.
+#[cfg(target_arch = "x86_64")]
+macro_rules! watertight_lanes {
+    ($v:ty, $ld:ident, $lane:ident, $ray:expr; $sub:path, $mul:path, $add:path, $max:path, $min:path,
+     $andnot:path, $or:path, $xor:path, $and:path, $div:path, $set1:path, $zero:path, $ngt:path, $ge:path,
+     $le:path, $movemask:path) => {{
+        let (ox, oy, oz) = ($lane(0), $lane(1), $lane(2));
+        let (sx, sy, sz) = ($lane(3), $lane(4), $lane(5));
+        // a = v0 - o, b = v1 - o, c = v2 - o on the permuted axes.
+        let (a_x, a_y, a_z) = ($sub($ld(0, 0), ox), $sub($ld(0, 1), oy), $sub($ld(0, 2), oz));
+        let (b_x, b_y, b_z) = ($sub($ld(1, 0), ox), $sub($ld(1, 1), oy), $sub($ld(1, 2), oz));
+        let (c_x, c_y, c_z) = ($sub($ld(2, 0), ox), $sub($ld(2, 1), oy), $sub($ld(2, 2), oz));
+        let ax = $sub(a_x, $mul(sx, a_z));
+        let ay = $sub(a_y, $mul(sy, a_z));
+        let bx = $sub(b_x, $mul(sx, b_z));
+        let by = $sub(b_y, $mul(sy, b_z));
+        let cx = $sub(c_x, $mul(sx, c_z));
+        let cy = $sub(c_y, $mul(sy, c_z));
+        let e0 = $sub($mul(cx, by), $mul(cy, bx));
+        let e1 = $sub($mul(ax, cy), $mul(ay, cx));
+        let e2 = $sub($mul(bx, ay), $mul(by, ax));
+        let az = $mul(sz, a_z);
+        let bz = $mul(sz, b_z);
+        let cz = $mul(sz, c_z);
+        // The edge functions' error bound (`watertight_e_error`, same operation order).
+        let sign = $set1(-0.0);
+        let abs = |x: $v| $andnot(sign, x);
+        // Operands are non-negative (no -0); a NaN lane fails every comparison below and is never a hit.
+        let max3 = |x: $v, y: $v, w: $v| $max($max(abs(x), abs(y)), abs(w));
+        let (max_xt, max_yt, max_zt) = (max3(ax, bx, cx), max3(ay, by, cy), max3(az, bz, cz));
+        let (g2, g3, g5) = ($set1(gamma(2)), $set1(gamma(3)), $set1(gamma(5)));
+        let delta_x = $mul(g5, $add(max_xt, max_zt));
+        let delta_y = $mul(g5, $add(max_yt, max_zt));
+        let delta_e =
+            $mul($set1(2.0), $add($add($mul($mul(g2, max_xt), max_yt), $mul(delta_y, max_xt)), $mul(delta_x, max_yt)));
+        // Lanes with an edge function within SIGN_MARGIN bounds of 0 (or a
+        // NaN bound or minimum): uncertain sign, decided by the scalar routine.
+        let min_e = $min($min(abs(e0), abs(e1)), abs(e2));
+        let uncertain = $ngt(min_e, $mul($set1(SIGN_MARGIN), delta_e));
+        // In the other lanes, if no edge function is NaN, `min_e` is their
+        // least magnitude and exceeds a bound >= 0, so all are nonzero and
+        // "some negative and some positive" is "the sign bits differ"; a NaN
+        // one (which `$min` may pass over) makes det and t NaN, which
+        // no range admits, as in the scalar routine. Only the sign bit of
+        // `mixed` is meaningful.
+        let mixed = $or($xor(e0, e1), $xor(e0, e2));
+        let det = $add($add(e0, e1), e2);
+        let t_scaled = $add($add($mul(e0, az), $mul(e1, bz)), $mul(e2, cz));
+        let inv_det = $div($set1(1.0), det);
+        let t = $mul(t_scaled, inv_det);
+        // Ordered comparisons: a NaN t fails both, as `!(t >= t_min && t <= t_max)` rejects it.
+        let in_range = $and($ge(t, $set1($ray.t_min)), $le(t, $set1($ray.t_max)));
+        // Sign bits only from here on (movemask reads nothing else).
+        let ok = $andnot($or(mixed, uncertain), in_range);
+        let zero_mask = $movemask(uncertain) as u32;
+        if $movemask(ok) == 0 {
+            // Most packets are missed: skip the t error bound.
+            let z = $zero();
+            return (0, zero_mask, z, z, z);
+        }
+        // The provably-positive-t check of `watertight_t_error` (pbrt-v4 6.8.7), same operation order.
+        let delta_z = $mul(g3, max_zt);
+        let max_e = max3(e0, e1, e2);
+        let t_err = $mul(
+            $mul($set1(3.0), $add($add($mul($mul(g3, max_e), max_zt), $mul(delta_e, max_zt)), $mul(delta_z, max_e))),
+            abs(inv_det),
+        );
+        // Lanes whose distance is not provably positive go to the scalar routine too.
+        let not_positive = $and($le(t, t_err), ok);
+        let ok = $andnot(not_positive, ok);
+        let zero_mask = zero_mask | $movemask(not_positive) as u32;
+        ($movemask(ok) as u32, zero_mask, t, $mul(e1, inv_det), $mul(e2, inv_det))
+    }};
 }
 
 /// The watertight test on four lanes: `(hit mask, uncertain mask, t, u, v)`.
@@ -323,84 +415,135 @@ fn tri4_sse(
         let ld = |j: usize, axis: usize| _mm_load_ps(base.add(48 * j + lr.rows[axis]).cast::<f32>());
         // The lanes are 16-byte rows of the 16-byte aligned `LeafRay`.
         let lane = |i: usize| _mm_load_ps(lr.lanes[i].as_ptr());
-        let (ox, oy, oz) = (lane(0), lane(1), lane(2));
-        let (sx, sy, sz) = (lane(3), lane(4), lane(5));
-        // a = v0 - o, b = v1 - o, c = v2 - o on the permuted axes.
-        let (a_x, a_y, a_z) = (_mm_sub_ps(ld(0, 0), ox), _mm_sub_ps(ld(0, 1), oy), _mm_sub_ps(ld(0, 2), oz));
-        let (b_x, b_y, b_z) = (_mm_sub_ps(ld(1, 0), ox), _mm_sub_ps(ld(1, 1), oy), _mm_sub_ps(ld(1, 2), oz));
-        let (c_x, c_y, c_z) = (_mm_sub_ps(ld(2, 0), ox), _mm_sub_ps(ld(2, 1), oy), _mm_sub_ps(ld(2, 2), oz));
-        let ax = _mm_sub_ps(a_x, _mm_mul_ps(sx, a_z));
-        let ay = _mm_sub_ps(a_y, _mm_mul_ps(sy, a_z));
-        let bx = _mm_sub_ps(b_x, _mm_mul_ps(sx, b_z));
-        let by = _mm_sub_ps(b_y, _mm_mul_ps(sy, b_z));
-        let cx = _mm_sub_ps(c_x, _mm_mul_ps(sx, c_z));
-        let cy = _mm_sub_ps(c_y, _mm_mul_ps(sy, c_z));
-        let e0 = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
-        let e1 = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
-        let e2 = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
-        let az = _mm_mul_ps(sz, a_z);
-        let bz = _mm_mul_ps(sz, b_z);
-        let cz = _mm_mul_ps(sz, c_z);
-        // The edge functions' error bound (`watertight_e_error`, same operation order).
-        let sign = _mm_set1_ps(-0.0);
-        let abs = |x: __m128| _mm_andnot_ps(sign, x);
-        // Operands are non-negative (no -0); a NaN lane fails every comparison below and is never a hit.
-        let max3 = |x: __m128, y: __m128, w: __m128| _mm_max_ps(_mm_max_ps(abs(x), abs(y)), abs(w));
-        let (max_xt, max_yt, max_zt) = (max3(ax, bx, cx), max3(ay, by, cy), max3(az, bz, cz));
-        let (g2, g3, g5) = (_mm_set1_ps(gamma(2)), _mm_set1_ps(gamma(3)), _mm_set1_ps(gamma(5)));
-        let delta_x = _mm_mul_ps(g5, _mm_add_ps(max_xt, max_zt));
-        let delta_y = _mm_mul_ps(g5, _mm_add_ps(max_yt, max_zt));
-        let delta_e = _mm_mul_ps(
-            _mm_set1_ps(2.0),
-            _mm_add_ps(
-                _mm_add_ps(_mm_mul_ps(_mm_mul_ps(g2, max_xt), max_yt), _mm_mul_ps(delta_y, max_xt)),
-                _mm_mul_ps(delta_x, max_yt),
-            ),
-        );
-        // Lanes with an edge function within SIGN_MARGIN bounds of 0 (or a
-        // NaN bound or minimum): uncertain sign, decided by the scalar routine.
-        let min_e = _mm_min_ps(_mm_min_ps(abs(e0), abs(e1)), abs(e2));
-        let uncertain = _mm_cmpngt_ps(min_e, _mm_mul_ps(_mm_set1_ps(SIGN_MARGIN), delta_e));
-        // In the other lanes, if no edge function is NaN, `min_e` is their
-        // least magnitude and exceeds a bound >= 0, so all are nonzero and
-        // "some negative and some positive" is "the sign bits differ"; a NaN
-        // one (which `_mm_min_ps` may pass over) makes det and t NaN, which
-        // no range admits, as in the scalar routine. Only the sign bit of
-        // `mixed` is meaningful.
-        let mixed = _mm_or_ps(_mm_xor_ps(e0, e1), _mm_xor_ps(e0, e2));
-        let det = _mm_add_ps(_mm_add_ps(e0, e1), e2);
-        let t_scaled = _mm_add_ps(_mm_add_ps(_mm_mul_ps(e0, az), _mm_mul_ps(e1, bz)), _mm_mul_ps(e2, cz));
-        let inv_det = _mm_div_ps(_mm_set1_ps(1.0), det);
-        let t = _mm_mul_ps(t_scaled, inv_det);
-        // Ordered comparisons: a NaN t fails both, as `!(t >= t_min && t <= t_max)` rejects it.
-        let in_range = _mm_and_ps(_mm_cmpge_ps(t, _mm_set1_ps(ray.t_min)), _mm_cmple_ps(t, _mm_set1_ps(ray.t_max)));
-        // Sign bits only from here on (movemask reads nothing else).
-        let ok = _mm_andnot_ps(_mm_or_ps(mixed, uncertain), in_range);
-        let zero_mask = _mm_movemask_ps(uncertain) as u32;
-        if _mm_movemask_ps(ok) == 0 {
-            // Most packets are missed: skip the t error bound.
-            let z = _mm_setzero_ps();
-            return (0, zero_mask, z, z, z);
-        }
-        // The provably-positive-t check of `watertight_t_error` (pbrt-v4 6.8.7), same operation order.
-        let delta_z = _mm_mul_ps(g3, max_zt);
-        let max_e = max3(e0, e1, e2);
-        let t_err = _mm_mul_ps(
-            _mm_mul_ps(
-                _mm_set1_ps(3.0),
-                _mm_add_ps(
-                    _mm_add_ps(_mm_mul_ps(_mm_mul_ps(g3, max_e), max_zt), _mm_mul_ps(delta_e, max_zt)),
-                    _mm_mul_ps(delta_z, max_e),
-                ),
-            ),
-            abs(inv_det),
-        );
-        // Lanes whose distance is not provably positive go to the scalar routine too.
-        let not_positive = _mm_and_ps(_mm_cmple_ps(t, t_err), ok);
-        let ok = _mm_andnot_ps(not_positive, ok);
-        let zero_mask = zero_mask | _mm_movemask_ps(not_positive) as u32;
-        (_mm_movemask_ps(ok) as u32, zero_mask, t, _mm_mul_ps(e1, inv_det), _mm_mul_ps(e2, inv_det))
+        watertight_lanes!(__m128, ld, lane, ray; _mm_sub_ps, _mm_mul_ps, _mm_add_ps, _mm_max_ps, _mm_min_ps,
+            _mm_andnot_ps, _mm_or_ps, _mm_xor_ps, _mm_and_ps, _mm_div_ps, _mm_set1_ps, _mm_setzero_ps,
+            _mm_cmpngt_ps, _mm_cmpge_ps, _mm_cmple_ps, _mm_movemask_ps)
     }
+}
+
+/// [`tri4_sse`] on eight lanes: packet `p` in lanes 0-3 and packet `q` in
+/// lanes 4-7, the same operations lane for lane (so, as there, every decided
+/// lane is the scalar routine's answer bit for bit). A leaf of five to eight
+/// triangles takes one such test instead of two four-lane ones.
+///
+/// # Safety
+/// The CPU must have AVX2 (it runs inside the AVX2 walks only).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn tri8_avx(
+    p: &Tri4,
+    q: &Tri4,
+    ray: &Ray,
+    lr: &LeafRay,
+) -> (u32, u32, std::arch::x86_64::__m256, std::arch::x86_64::__m256, std::arch::x86_64::__m256) {
+    use std::arch::x86_64::*;
+    // SAFETY: the caller guarantees AVX2; the assembly is empty; the loads are
+    // justified where they occur.
+    unsafe {
+        // As in `tri4_sse`: the ray's constants are read where they are used.
+        std::arch::asm!("/* {0} */", in(reg) lr, options(nostack, preserves_flags));
+        let (bp, bq) = (p.v.as_ptr().cast::<u8>(), q.v.as_ptr().cast::<u8>());
+        // The same row of both packets (aligned in-bounds loads, as in
+        // `tri4_sse`), `p`'s in the low half and `q`'s in the high half.
+        let ld = |j: usize, axis: usize| {
+            let off = 48 * j + lr.rows[axis];
+            _mm256_insertf128_ps::<1>(
+                _mm256_castps128_ps256(_mm_load_ps(bp.add(off).cast::<f32>())),
+                _mm_load_ps(bq.add(off).cast::<f32>()),
+            )
+        };
+        // The lanes are 16-byte rows of the 16-byte aligned `LeafRay`, broadcast to both halves.
+        let lane = |i: usize| _mm256_broadcast_ps(&*lr.lanes[i].as_ptr().cast::<__m128>());
+        watertight_lanes!(__m256, ld, lane, ray; _mm256_sub_ps, _mm256_mul_ps, _mm256_add_ps, _mm256_max_ps,
+            _mm256_min_ps, _mm256_andnot_ps, _mm256_or_ps, _mm256_xor_ps, _mm256_and_ps, _mm256_div_ps,
+            _mm256_set1_ps, _mm256_setzero_ps, _mm256_cmp_ps::<_CMP_NGT_UQ>, _mm256_cmp_ps::<_CMP_GE_OQ>,
+            _mm256_cmp_ps::<_CMP_LE_OQ>, _mm256_movemask_ps)
+    }
+}
+
+/// The watertight test of one or two consecutive packets `pq` (lanes 0-3:
+/// `pq[0]`, lanes 4-7: `pq[1]`): `(hit mask, uncertain mask, [t, u, v])`,
+/// the rows written only when some lane is a hit. Inside the AVX2 walks only.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn watertight_pair(pq: &[Tri4], ray: &Ray, lr: &LeafRay) -> (u32, u32, [[f32; 2 * PW]; 3]) {
+    use std::arch::x86_64::*;
+    let mut rows = [[0.0f32; 2 * PW]; 3];
+    if let [p, q] = pq {
+        // SAFETY: the callers run inside the AVX2 walks, on CPUs with AVX2.
+        let (ok, zero, t, u, v) = unsafe { tri8_avx(p, q, ray, lr) };
+        if ok != 0 {
+            for (row, x) in rows.iter_mut().zip([t, u, v]) {
+                // SAFETY: each row holds 8 floats; storeu has no alignment requirement.
+                unsafe { _mm256_storeu_ps(row.as_mut_ptr(), x) };
+            }
+        }
+        return (ok, zero, rows);
+    }
+    let (ok, zero, t, u, v) = tri4_sse(&pq[0], ray, lr);
+    if ok != 0 {
+        for (row, x) in rows.iter_mut().zip([t, u, v]) {
+            // SAFETY: SSE is part of the x86_64 baseline; each row holds at least 4 floats.
+            unsafe { _mm_storeu_ps(row.as_mut_ptr(), x) };
+        }
+    }
+    (ok, zero, rows)
+}
+
+/// The Moller-Trumbore test's arithmetic on a vector of `$n` lanes (four or
+/// eight), written once for [`tri4_mt_sse`] and [`tri8_mt_avx`]: `$v` is the
+/// vector type, `$ld(r)` loads row `r` of the packets' vertex rows, and the
+/// remaining arguments are the vector width's intrinsics. Evaluates to
+/// `(hit mask, t, u, v)` (see [`tri4_mt_sse`]); returns early from the
+/// enclosing function when no lane can be a hit.
+#[cfg(target_arch = "x86_64")]
+macro_rules! moller_trumbore_lanes {
+    ($v:ty, $n:expr, $ld:ident, $ray:expr; $sub:path, $mul:path, $add:path, $andnot:path, $or:path, $and:path,
+     $div:path, $set1:path, $zero:path, $gt:path, $lt:path, $ge:path, $le:path, $movemask:path, $store:path) => {{
+        let (o, d) = ($ray.origin.to_array(), $ray.dir.to_array());
+        let (dx, dy, dz) = ($set1(d[0]), $set1(d[1]), $set1(d[2]));
+        let (v0x, v0y, v0z) = ($ld(0), $ld(1), $ld(2));
+        // e1 = v1 - v0, e2 = v2 - v0.
+        let (e1x, e1y, e1z) = ($sub($ld(3), v0x), $sub($ld(4), v0y), $sub($ld(5), v0z));
+        let (e2x, e2y, e2z) = ($sub($ld(6), v0x), $sub($ld(7), v0y), $sub($ld(8), v0z));
+        let dot = |ax: $v, ay: $v, az: $v, bx: $v, by: $v, bz: $v| $add($add($mul(ax, bx), $mul(ay, by)), $mul(az, bz));
+        // p = dir x e2 (glam: x = a.y b.z - b.y a.z, y = a.z b.x - b.z a.x, z = a.x b.y - b.x a.y).
+        let px = $sub($mul(dy, e2z), $mul(e2y, dz));
+        let py = $sub($mul(dz, e2x), $mul(e2z, dx));
+        let pz = $sub($mul(dx, e2y), $mul(e2x, dy));
+        let det = dot(e1x, e1y, e1z, px, py, pz);
+        let (zero, one) = ($zero(), $set1(1.0));
+        // `det == 0 || !det.is_finite()` rejects: keep 0 < |det| < inf (a NaN fails both).
+        let abs_det = $andnot($set1(-0.0), det);
+        let det_ok = $and($gt(abs_det, zero), $lt(abs_det, $set1(f32::INFINITY)));
+        let inv_det = $div(one, det);
+        // tv = origin - v0.
+        let (tvx, tvy, tvz) = ($sub($set1(o[0]), v0x), $sub($set1(o[1]), v0y), $sub($set1(o[2]), v0z));
+        let u = $mul(dot(tvx, tvy, tvz, px, py, pz), inv_det);
+        // `(0.0..=1.0).contains(&u)`: ordered comparisons, a NaN fails.
+        let ok = $and(det_ok, $and($ge(u, zero), $le(u, one)));
+        if $movemask(ok) == 0 {
+            // Most packets are missed here: skip the second cross product and the stores.
+            return (0, [0.0; $n], [0.0; $n], [0.0; $n]);
+        }
+        // q = tv x e1.
+        let qx = $sub($mul(tvy, e1z), $mul(e1y, tvz));
+        let qy = $sub($mul(tvz, e1x), $mul(e1z, tvx));
+        let qz = $sub($mul(tvx, e1y), $mul(e1x, tvy));
+        let v = $mul(dot(dx, dy, dz, qx, qy, qz), inv_det);
+        let v_out = $or($lt(v, zero), $gt($add(u, v), one));
+        let t = $mul(dot(e2x, e2y, e2z, qx, qy, qz), inv_det);
+        // `!(t >= t_min && t <= t_max)` rejects: ordered comparisons, a NaN t fails.
+        let in_range = $and($ge(t, $set1($ray.t_min)), $le(t, $set1($ray.t_max)));
+        let ok = $andnot(v_out, $and(ok, in_range));
+        let (mut ts, mut us, mut vs) = ([0.0f32; $n], [0.0f32; $n], [0.0f32; $n]);
+        // Each array has room for the vector's floats; storeu has no alignment requirement.
+        $store(ts.as_mut_ptr(), t);
+        $store(us.as_mut_ptr(), u);
+        $store(vs.as_mut_ptr(), v);
+        ($movemask(ok) as u32, ts, us, vs)
+    }};
 }
 
 /// The Moller-Trumbore test on four lanes: `(hit mask, t, u, v)`, lane for
@@ -419,55 +562,53 @@ fn tri4_mt_sse(p: &Tri4, ray: &Ray) -> (u32, [f32; PW], [f32; PW], [f32; PW]) {
     unsafe {
         // Each row is 16 bytes at a 16-byte multiple inside a 32-byte aligned packet: aligned loads are valid.
         let ld = |r: usize| _mm_load_ps(p.v[r].as_ptr());
-        let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
-        let (dx, dy, dz) = (_mm_set1_ps(d[0]), _mm_set1_ps(d[1]), _mm_set1_ps(d[2]));
-        let (v0x, v0y, v0z) = (ld(0), ld(1), ld(2));
-        // e1 = v1 - v0, e2 = v2 - v0.
-        let (e1x, e1y, e1z) = (_mm_sub_ps(ld(3), v0x), _mm_sub_ps(ld(4), v0y), _mm_sub_ps(ld(5), v0z));
-        let (e2x, e2y, e2z) = (_mm_sub_ps(ld(6), v0x), _mm_sub_ps(ld(7), v0y), _mm_sub_ps(ld(8), v0z));
-        let dot = |ax: __m128, ay: __m128, az: __m128, bx: __m128, by: __m128, bz: __m128| {
-            _mm_add_ps(_mm_add_ps(_mm_mul_ps(ax, bx), _mm_mul_ps(ay, by)), _mm_mul_ps(az, bz))
-        };
-        // p = dir x e2 (glam: x = a.y b.z - b.y a.z, y = a.z b.x - b.z a.x, z = a.x b.y - b.x a.y).
-        let px = _mm_sub_ps(_mm_mul_ps(dy, e2z), _mm_mul_ps(e2y, dz));
-        let py = _mm_sub_ps(_mm_mul_ps(dz, e2x), _mm_mul_ps(e2z, dx));
-        let pz = _mm_sub_ps(_mm_mul_ps(dx, e2y), _mm_mul_ps(e2x, dy));
-        let det = dot(e1x, e1y, e1z, px, py, pz);
-        let (zero, one) = (_mm_setzero_ps(), _mm_set1_ps(1.0));
-        // `det == 0 || !det.is_finite()` rejects: keep 0 < |det| < inf (a NaN fails both).
-        let abs_det = _mm_andnot_ps(_mm_set1_ps(-0.0), det);
-        let det_ok = _mm_and_ps(_mm_cmpgt_ps(abs_det, zero), _mm_cmplt_ps(abs_det, _mm_set1_ps(f32::INFINITY)));
-        let inv_det = _mm_div_ps(one, det);
-        // tv = origin - v0.
-        let (tvx, tvy, tvz) = (
-            _mm_sub_ps(_mm_set1_ps(o[0]), v0x),
-            _mm_sub_ps(_mm_set1_ps(o[1]), v0y),
-            _mm_sub_ps(_mm_set1_ps(o[2]), v0z),
-        );
-        let u = _mm_mul_ps(dot(tvx, tvy, tvz, px, py, pz), inv_det);
-        // `(0.0..=1.0).contains(&u)`: ordered comparisons, a NaN fails.
-        let ok = _mm_and_ps(det_ok, _mm_and_ps(_mm_cmpge_ps(u, zero), _mm_cmple_ps(u, one)));
-        if _mm_movemask_ps(ok) == 0 {
-            // Most packets are missed here: skip the second cross product and the stores.
-            return (0, [0.0; PW], [0.0; PW], [0.0; PW]);
-        }
-        // q = tv x e1.
-        let qx = _mm_sub_ps(_mm_mul_ps(tvy, e1z), _mm_mul_ps(e1y, tvz));
-        let qy = _mm_sub_ps(_mm_mul_ps(tvz, e1x), _mm_mul_ps(e1z, tvx));
-        let qz = _mm_sub_ps(_mm_mul_ps(tvx, e1y), _mm_mul_ps(e1x, tvy));
-        let v = _mm_mul_ps(dot(dx, dy, dz, qx, qy, qz), inv_det);
-        let v_out = _mm_or_ps(_mm_cmplt_ps(v, zero), _mm_cmpgt_ps(_mm_add_ps(u, v), one));
-        let t = _mm_mul_ps(dot(e2x, e2y, e2z, qx, qy, qz), inv_det);
-        // `!(t >= t_min && t <= t_max)` rejects: ordered comparisons, a NaN t fails.
-        let in_range = _mm_and_ps(_mm_cmpge_ps(t, _mm_set1_ps(ray.t_min)), _mm_cmple_ps(t, _mm_set1_ps(ray.t_max)));
-        let ok = _mm_andnot_ps(v_out, _mm_and_ps(ok, in_range));
-        let (mut ts, mut us, mut vs) = ([0.0f32; PW], [0.0f32; PW], [0.0f32; PW]);
-        // Each array has room for 4 floats; storeu has no alignment requirement.
-        _mm_storeu_ps(ts.as_mut_ptr(), t);
-        _mm_storeu_ps(us.as_mut_ptr(), u);
-        _mm_storeu_ps(vs.as_mut_ptr(), v);
-        (_mm_movemask_ps(ok) as u32, ts, us, vs)
+        moller_trumbore_lanes!(__m128, PW, ld, ray; _mm_sub_ps, _mm_mul_ps, _mm_add_ps, _mm_andnot_ps, _mm_or_ps,
+            _mm_and_ps, _mm_div_ps, _mm_set1_ps, _mm_setzero_ps, _mm_cmpgt_ps, _mm_cmplt_ps, _mm_cmpge_ps,
+            _mm_cmple_ps, _mm_movemask_ps, _mm_storeu_ps)
     }
+}
+
+/// [`tri4_mt_sse`] on eight lanes: packet `p` in lanes 0-3 and packet `q` in
+/// lanes 4-7, the same operations lane for lane.
+///
+/// # Safety
+/// The CPU must have AVX2 (it runs inside the AVX2 walks only).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn tri8_mt_avx(p: &Tri4, q: &Tri4, ray: &Ray) -> (u32, [f32; 2 * PW], [f32; 2 * PW], [f32; 2 * PW]) {
+    use std::arch::x86_64::*;
+    // SAFETY: the caller guarantees AVX2; the loads and stores are justified where they occur.
+    unsafe {
+        // Row `r` of both packets (16-byte rows at 16-byte multiples inside
+        // 32-byte aligned packets: aligned loads), `p`'s in the low half.
+        let ld = |r: usize| {
+            _mm256_insertf128_ps::<1>(
+                _mm256_castps128_ps256(_mm_load_ps(p.v[r].as_ptr())),
+                _mm_load_ps(q.v[r].as_ptr()),
+            )
+        };
+        moller_trumbore_lanes!(__m256, 2 * PW, ld, ray; _mm256_sub_ps, _mm256_mul_ps, _mm256_add_ps, _mm256_andnot_ps,
+            _mm256_or_ps, _mm256_and_ps, _mm256_div_ps, _mm256_set1_ps, _mm256_setzero_ps,
+            _mm256_cmp_ps::<_CMP_GT_OQ>, _mm256_cmp_ps::<_CMP_LT_OQ>, _mm256_cmp_ps::<_CMP_GE_OQ>,
+            _mm256_cmp_ps::<_CMP_LE_OQ>, _mm256_movemask_ps, _mm256_storeu_ps)
+    }
+}
+
+/// The Moller-Trumbore test of one or two consecutive packets `pq` (lanes
+/// 0-3: `pq[0]`, lanes 4-7: `pq[1]`): `(hit mask, [t, u, v])`. Inside the
+/// AVX2 walks only.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn moller_trumbore_pair(pq: &[Tri4], ray: &Ray) -> (u32, [[f32; 2 * PW]; 3]) {
+    if let [p, q] = pq {
+        // SAFETY: the callers run inside the AVX2 walks, on CPUs with AVX2.
+        let (ok, t, u, v) = unsafe { tri8_mt_avx(p, q, ray) };
+        return (ok, [t, u, v]);
+    }
+    let (ok, t, u, v) = tri4_mt_sse(&pq[0], ray);
+    let wide = |x: [f32; PW]| std::array::from_fn(|l| if l < PW { x[l] } else { 0.0 });
+    (ok, [wide(t), wide(u), wide(v)])
 }
 
 #[cfg(all(test, target_arch = "x86_64"))]
@@ -521,66 +662,89 @@ mod tests {
 
     #[test]
     fn watertight_lanes_are_the_scalar_routine() {
-        // Every lane the SSE test decides (hit or miss) is the scalar
+        // Every lane the SIMD test decides (hit or miss) is the scalar
         // routine's answer bit for bit, on every axis permutation of
-        // `LeafRay`; the uncertain lanes are left to that routine.
-        let mut rng = Pcg32::new(0x5754, 3);
-        let (mut hits, mut cases, mut uncertain, mut decided_hits) = (0, 0, 0, 0);
-        for _ in 0..50_000 {
-            let (p, ray) = packet_and_ray(&mut rng);
-            if ray.dir == glam::Vec3::ZERO || !ray.dir.is_finite() {
-                continue;
-            }
-            let lr = LeafRay::new(&ray);
-            let (mask, unc, t, u, v) = tri4_sse(&p, &ray, &lr);
-            let (mut ts, mut us, mut vs) = ([0.0f32; PW], [0.0f32; PW], [0.0f32; PW]);
-            // SAFETY: SSE is part of the x86_64 baseline; the arrays hold 4 floats.
-            unsafe {
-                use std::arch::x86_64::_mm_storeu_ps;
-                _mm_storeu_ps(ts.as_mut_ptr(), t);
-                _mm_storeu_ps(us.as_mut_ptr(), u);
-                _mm_storeu_ps(vs.as_mut_ptr(), v);
-            }
-            assert_eq!(mask & unc, 0, "a lane both hit and uncertain");
-            for l in 0..PW {
-                let scalar = watertight(&ray, &lr.wr, p.vertex(0, l), p.vertex(1, l), p.vertex(2, l));
-                cases += 1;
-                hits += usize::from(scalar.is_some());
-                if unc >> l & 1 != 0 {
-                    uncertain += 1;
+        // `LeafRay`; the uncertain lanes are left to that routine. Both
+        // widths the walks use: one packet (`tri4_sse`) and, on CPUs with
+        // AVX2, two at once (`tri8_avx`), through `watertight_pair` as the
+        // leaf tests call it.
+        let widths: &[usize] = if is_x86_feature_detected!("avx2") { &[1, 2] } else { &[1] };
+        for &n in widths {
+            let mut rng = Pcg32::new(0x5754, 3 + n as u64);
+            let (mut hits, mut cases, mut uncertain, mut decided_hits) = (0, 0, 0, 0);
+            for _ in 0..50_000 {
+                let (p, ray) = packet_and_ray(&mut rng);
+                // The second packet's lanes: other random triangles, or the
+                // first packet's lanes permuted (the ray aims at one of them).
+                let (q, _) = packet_and_ray(&mut rng);
+                let q = if rng.below(2) == 0 {
+                    q
+                } else {
+                    let mut r = p;
+                    for row in &mut r.v {
+                        row.rotate_left(1 + rng.below(3) as usize);
+                    }
+                    r
+                };
+                if ray.dir == glam::Vec3::ZERO || !ray.dir.is_finite() {
                     continue;
                 }
-                let simd = (mask >> l & 1 != 0).then(|| (ts[l], us[l], vs[l]));
-                let bits = |h: Option<(f32, f32, f32)>| h.map(|(a, b, c)| (a.to_bits(), b.to_bits(), c.to_bits()));
-                assert_eq!(bits(simd), bits(scalar), "lane {l} of {p:?}, {ray:?}");
-                decided_hits += usize::from(simd.is_some());
+                let lr = LeafRay::new(&ray);
+                let pq = [p, q];
+                let (mask, unc, [ts, us, vs]) = watertight_pair(&pq[..n], &ray, &lr);
+                assert_eq!(mask & unc, 0, "a lane both hit and uncertain");
+                assert_eq!((mask | unc) >> (PW * n), 0, "a lane past the packets");
+                for l in 0..PW * n {
+                    let t = &pq[l / PW];
+                    let k = l % PW;
+                    let scalar = watertight(&ray, &lr.wr, t.vertex(0, k), t.vertex(1, k), t.vertex(2, k));
+                    cases += 1;
+                    hits += usize::from(scalar.is_some());
+                    if unc >> l & 1 != 0 {
+                        uncertain += 1;
+                        continue;
+                    }
+                    let simd = (mask >> l & 1 != 0).then(|| (ts[l], us[l], vs[l]));
+                    let bits = |h: Option<(f32, f32, f32)>| h.map(|(a, b, c)| (a.to_bits(), b.to_bits(), c.to_bits()));
+                    assert_eq!(bits(simd), bits(scalar), "lane {l} of {pq:?}, {ray:?}");
+                    decided_hits += usize::from(simd.is_some());
+                }
             }
+            // The check means something only if the SIMD test itself decides
+            // many lanes and many hits. (The special coordinates, zeros,
+            // infinities and NaNs among them, leave many lanes uncertain.)
+            assert!(hits > cases / 50 && hits < cases / 2, "{n} packets: {hits} hits of {cases}");
+            assert!(uncertain < cases / 2, "{n} packets: {uncertain} uncertain lanes of {cases}");
+            assert!(decided_hits > hits / 2, "{n} packets: {decided_hits} of {hits} hits decided by the SIMD test");
         }
-        // The check means something only if the SSE test itself decides many
-        // lanes and many hits. (The special coordinates, zeros, infinities and
-        // NaNs among them, leave many lanes uncertain.)
-        assert!(hits > cases / 50 && hits < cases / 2, "{hits} hits of {cases}");
-        assert!(uncertain < cases / 2, "{uncertain} uncertain lanes of {cases}");
-        assert!(decided_hits > hits / 2, "{decided_hits} of {hits} hits decided by the SSE test");
     }
 
     #[test]
     fn moller_trumbore_lanes_are_the_scalar_routine() {
-        let mut rng = Pcg32::new(0x4d54, 7);
-        let (mut hits, mut cases) = (0, 0);
-        for _ in 0..50_000 {
-            let (p, ray) = packet_and_ray(&mut rng);
-            let (mask, t, u, v) = tri4_mt_sse(&p, &ray);
-            for l in 0..PW {
-                let scalar = intersect_moller_trumbore(&ray, p.vertex(0, l), p.vertex(1, l), p.vertex(2, l));
-                let simd = (mask >> l & 1 != 0).then(|| (t[l], u[l], v[l]));
-                let bits = |h: Option<(f32, f32, f32)>| h.map(|(a, b, c)| (a.to_bits(), b.to_bits(), c.to_bits()));
-                assert_eq!(bits(simd), bits(scalar), "lane {l} of {p:?}, {ray:?}");
-                hits += usize::from(scalar.is_some());
-                cases += 1;
+        // One packet (`tri4_mt_sse`) and, on CPUs with AVX2, two at once
+        // (`tri8_mt_avx`), through `moller_trumbore_pair` as the leaf tests call it.
+        let widths: &[usize] = if is_x86_feature_detected!("avx2") { &[1, 2] } else { &[1] };
+        for &n in widths {
+            let mut rng = Pcg32::new(0x4d54, 7 + n as u64);
+            let (mut hits, mut cases) = (0, 0);
+            for _ in 0..50_000 {
+                let (p, ray) = packet_and_ray(&mut rng);
+                let (q, _) = packet_and_ray(&mut rng);
+                let pq = [p, q];
+                let (mask, [t, u, v]) = moller_trumbore_pair(&pq[..n], &ray);
+                assert_eq!(mask >> (PW * n), 0, "a lane past the packets");
+                for l in 0..PW * n {
+                    let (tri, k) = (&pq[l / PW], l % PW);
+                    let scalar = intersect_moller_trumbore(&ray, tri.vertex(0, k), tri.vertex(1, k), tri.vertex(2, k));
+                    let simd = (mask >> l & 1 != 0).then(|| (t[l], u[l], v[l]));
+                    let bits = |h: Option<(f32, f32, f32)>| h.map(|(a, b, c)| (a.to_bits(), b.to_bits(), c.to_bits()));
+                    assert_eq!(bits(simd), bits(scalar), "lane {l} of {pq:?}, {ray:?}");
+                    hits += usize::from(scalar.is_some());
+                    cases += 1;
+                }
             }
+            // The check means something only if both answers occur often.
+            assert!(hits > cases / 50 && hits < cases / 2, "{n} packets: {hits} hits of {cases}");
         }
-        // The check means something only if both answers occur often.
-        assert!(hits > cases / 50 && hits < cases / 2, "{hits} hits of {cases}");
     }
 }

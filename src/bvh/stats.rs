@@ -5,6 +5,7 @@ use serde::Serialize;
 
 use super::BinaryBvh;
 use super::build_sah::{INTERSECTION_COST, TRAVERSAL_COST, leaf_slots};
+use super::packet::leaf_block;
 
 /// Statistics of a binary BVH (and of its 8-wide collapse).
 #[derive(Clone, Debug, Serialize)]
@@ -23,7 +24,7 @@ pub struct BvhStats {
     pub max_prims_per_leaf: u32,
     /// Mean primitive count of a leaf.
     pub mean_prims_per_leaf: f64,
-    /// SAH cost with the `sah` builder's constants and leaf packets of [`super::build_sah::BLOCK`]
+    /// SAH cost with the `sah` builder's constants and leaf tests of [`super::packet::leaf_block`] triangles
     /// primitives, relative to the root's surface area.
     pub sah_cost: f64,
     /// Memory of binary nodes and reordered primitives, in bytes.
@@ -57,6 +58,7 @@ impl BvhStats {
         let Some(root) = bvh.nodes.first() else { return s };
         let root_area = f64::from(root.bounds().surface_area());
         let mut area_sum = 0.0f64;
+        let block = leaf_block(bvh.prims.len());
         let mut stack = vec![(0usize, 1u32)];
         while let Some((i, level)) = stack.pop() {
             let n = &bvh.nodes[i];
@@ -65,7 +67,7 @@ impl BvhStats {
                 s.leaves += 1;
                 s.levels = s.levels.max(level);
                 s.max_prims_per_leaf = s.max_prims_per_leaf.max(n.count);
-                area_sum += a * f64::from(INTERSECTION_COST) * leaf_slots(n.count as usize) as f64;
+                area_sum += a * f64::from(INTERSECTION_COST) * leaf_slots(n.count as usize, block) as f64;
             } else {
                 area_sum += a * f64::from(TRAVERSAL_COST);
                 stack.push((i + 1, level + 1));

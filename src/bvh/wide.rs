@@ -595,7 +595,7 @@ pub const PREFETCH_ALL_BYTES: usize = 2 << 20;
 impl WideBvh {
     /// Collapse `bvh` into 8-wide nodes (see [`super::collapse`]).
     pub fn from_binary(bvh: BinaryBvh) -> Self {
-        let nodes = super::collapse::collapse(&bvh.nodes);
+        let nodes = super::collapse::collapse(&bvh.nodes, super::packet::leaf_block(bvh.prims.entries.len()));
         let e = &bvh.prims.entries;
         let num_triangles = bvh.prims.num_triangles;
         Self::assemble(nodes, num_triangles, bvh.prims.spheres.clone(), e.len(), |k| e[k].id, |k| e[k].v, |_| {})
@@ -604,7 +604,7 @@ impl WideBvh {
     /// [`Self::from_binary`] for a tree whose primitives are not gathered yet:
     /// leaf triangles go straight from `prims` into packets.
     pub fn from_tree(prims: &Primitives, tree: &BuiltTree) -> Self {
-        let nodes = super::collapse::collapse(&tree.nodes);
+        let nodes = super::collapse::collapse(&tree.nodes, super::packet::leaf_block(prims.len()));
         let nt = prims.triangles.len() as u32;
         let vertices = |k: usize| {
             let id = tree.order[k] as usize;
@@ -1224,6 +1224,50 @@ mod tests {
         let packed: u32 = lanes.iter().filter(|&&c| c & ENTRY_LEAF == 0).sum();
         assert_eq!(packed as usize + (w.prims.len()), prims.len());
         assert!(w.prims.entries.iter().any(|e| e.id == 2000));
+    }
+
+    /// A mesh large enough for leaves priced as eight-triangle tests
+    /// (`packet::WIDE_LEAVES_FROM`) gets leaves of five to eight triangles,
+    /// whose two packets the AVX2 walks test at once, and every walk (single
+    /// rays and packets of eight, closest and any hit, both triangle tests)
+    /// gives the brute-force answer bit for bit.
+    #[test]
+    fn eight_triangle_leaves_give_the_brute_force_answers() {
+        let prims = std::sync::Arc::new(soup(super::super::packet::WIDE_LEAVES_FROM + 1000, 21));
+        let w = super::super::build_wide(&prims, &AccelConfig::default());
+        let counts: Vec<u32> = w.nodes.iter().flat_map(|n| n.count).filter(|&c| c > 0).collect();
+        let pairs = counts.iter().filter(|&&c| c > 4).count();
+        assert!(
+            counts.iter().all(|&c| c <= 8) && pairs * 2 > counts.len(),
+            "{pairs} of {} leaves hold 5-8",
+            counts.len()
+        );
+        let b = prims.world_bounds();
+        let mut rays = crate::rays::incoherent_rays(&b, 1500, 23);
+        let eye = Vec3::new(0.5, 0.5, -2.0);
+        rays.extend((0..1500).map(|i| {
+            let (x, y) = ((i % 40) as f32 / 40.0, (i / 40) as f32 / 40.0);
+            Ray::new(eye, Vec3::new(x, y, 0.5) - eye)
+        }));
+        let bits = |h: Option<Hit>| h.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()));
+        for test in [TriangleTest::Watertight, TriangleTest::MollerTrumbore] {
+            let brute = crate::accel::brute::BruteForce::new(prims.clone(), test);
+            let k = w.kernels(test);
+            let mut closest = vec![None; rays.len()];
+            let mut any = vec![false; rays.len()];
+            k.closest_batch(&w, &rays, &mut closest);
+            k.any_batch(&w, &rays, &mut any);
+            let mut hits = 0;
+            for (i, r) in rays.iter().enumerate() {
+                let want = crate::accel::Tracer::intersect(&brute, r);
+                assert_eq!(bits(k.closest(&w, r)), bits(want), "{test:?} ray {i}");
+                assert_eq!(bits(closest[i]), bits(want), "{test:?} ray {i} in a packet");
+                assert_eq!(k.any(&w, r), want.is_some(), "{test:?} ray {i}");
+                assert_eq!(any[i], want.is_some(), "{test:?} ray {i} in a packet");
+                hits += usize::from(want.is_some());
+            }
+            assert!(hits > 1500, "only {hits} hits");
+        }
     }
 
     /// Packets of eight rays give every ray its single-ray answer, bit for

@@ -365,6 +365,13 @@ const SOA_LEAF_RAYS: u32 = 6;
 /// (9) 0.595 / 0.592; dragon_87k from 6 1.014 / 1.014, from 2 1.036 / 1.039;
 /// dragon_full (`--race 2`) from 6 1.074 / 1.069 / 1.036 / 1.057, from 2
 /// 1.048 / 1.028.
+///
+/// A leaf of `n` triangles asks for at least `n / 2` rays as well (the
+/// one-triangle test runs `n` times, the rays' own tests once per ray): in
+/// trees of eight-triangle leaves (`packet::WIDE_LEAVES_FROM`) dragon_87k's
+/// batch shadow rays went 1.130 / 1.130 -> 1.153 / 1.149 against Embree's
+/// default mode (`--race 5 --threads 1`, alternated binaries); leaves of up
+/// to four triangles keep the threshold of two.
 const SOA_LEAF_RAYS_ANY: u32 = 2;
 
 /// The watertight test of triangle `(v0, v1, v2)` against the eight rays of
@@ -981,7 +988,7 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool>(
             }
             let c = count & !ENTRY_LEAF;
             if count & ENTRY_LEAF == 0
-                && m.count_ones() >= SOA_LEAF_RAYS_ANY
+                && m.count_ones() >= SOA_LEAF_RAYS_ANY.max(c.div_ceil(2))
                 && let Some(pk) = &bvh.packets
             {
                 let (sh, t_max) = sheared.get_or_insert_with(|| {
