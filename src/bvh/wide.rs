@@ -1226,6 +1226,15 @@ mod tests {
         assert!(w.prims.entries.iter().any(|e| e.id == 2000));
     }
 
+    /// The closest and any-hit answers of `rays` through the batch entry points.
+    fn batch_answers(w: &WideBvh, k: &Kernels, rays: &[Ray]) -> (Vec<Option<Hit>>, Vec<bool>) {
+        let mut closest = vec![None; rays.len()];
+        let mut any = vec![false; rays.len()];
+        k.closest_batch(w, rays, &mut closest);
+        k.any_batch(w, rays, &mut any);
+        (closest, any)
+    }
+
     /// A mesh large enough for leaves priced as eight-triangle tests
     /// (`packet::WIDE_LEAVES_FROM`) gets leaves of five to eight triangles,
     /// whose two packets the AVX2 walks test at once, and every walk (single
@@ -1253,10 +1262,7 @@ mod tests {
         for test in [TriangleTest::Watertight, TriangleTest::MollerTrumbore] {
             let brute = crate::accel::brute::BruteForce::new(prims.clone(), test);
             let k = w.kernels(test);
-            let mut closest = vec![None; rays.len()];
-            let mut any = vec![false; rays.len()];
-            k.closest_batch(&w, &rays, &mut closest);
-            k.any_batch(&w, &rays, &mut any);
+            let (closest, any) = batch_answers(&w, &k, &rays);
             let mut hits = 0;
             for (i, r) in rays.iter().enumerate() {
                 let want = crate::accel::Tracer::intersect(&brute, r);
@@ -1293,10 +1299,7 @@ mod tests {
                 w.set_scalar();
             }
             let k = w.kernels(TriangleTest::Watertight);
-            let mut closest = vec![None; rays.len()];
-            let mut any = vec![false; rays.len()];
-            k.closest_batch(&w, &rays, &mut closest);
-            k.any_batch(&w, &rays, &mut any);
+            let (closest, any) = batch_answers(&w, &k, &rays);
             let mut hits = 0;
             for (i, r) in rays.iter().enumerate() {
                 let one = k.closest(&w, r);
