@@ -24,8 +24,9 @@ pub struct BvhStats {
     pub max_prims_per_leaf: u32,
     /// Mean primitive count of a leaf.
     pub mean_prims_per_leaf: f64,
-    /// SAH cost with the `sah` builder's constants and leaf tests of [`super::packet::leaf_block`] triangles
-    /// primitives, relative to the root's surface area.
+    /// SAH cost with the `sah` builder's constants, leaf counts rounded up to
+    /// whole tests of [`super::packet::leaf_block`] triangles, relative to the
+    /// root's surface area.
     pub sah_cost: f64,
     /// Memory of binary nodes and reordered primitives, in bytes.
     pub bytes: usize,
