@@ -47,39 +47,45 @@ impl Tri4 {
 }
 
 /// A ray's constants for the leaf tests of the `fast` traversal, made once
-/// per ray at its first leaf: the watertight test's shear ([`Self::wr`]) and,
-/// for the SSE packet test, the origin on the permuted axes and the shear
-/// constants, four lanes each, with the byte offsets of the permuted axes'
-/// rows in a [`Tri4`]. A leaf visit then broadcasts, stores and checks
-/// nothing: made per leaf, those took about 55 instructions, as many as a
-/// third of a packet test (callgrind, suzanne incoherent rays).
+/// per ray at its first leaf: the watertight test's shear and axis
+/// permutation, kept as the packet test reads them (the origin on the
+/// permuted axes, the shear constants, and the byte offsets of the permuted
+/// axes' rows in a [`Tri4`]); the scalar routines' [`WatertightRay`] is
+/// rebuilt from them ([`Self::wr`]) on the rare lanes and leaves that need
+/// it. A leaf visit then broadcasts each constant from memory as it uses it
+/// and stores nothing: made per leaf, the constants took about 55
+/// instructions, as many as a third of a packet test, and kept in four lanes
+/// each (with a copy of the [`WatertightRay`]) they took 77 per ray to make
+/// (callgrind, suzanne incoherent rays).
 #[derive(Clone, Copy, Debug)]
-#[repr(C, align(16))]
+#[repr(C)]
 pub struct LeafRay {
-    /// `origin[kx], origin[ky], origin[kz], sx, sy, sz`, each in four lanes.
-    lanes: [[f32; PW]; 6],
+    /// `origin[kx], origin[ky], origin[kz], sx, sy, sz`.
+    c: [f32; 6],
     /// Byte offsets of the rows of axes `kx, ky, kz` in a vertex's three
     /// rows of [`Tri4::v`]: `16 k`, each below 48 (made only by [`Self::new`]).
     rows: [usize; 3],
-    /// The shear, for the scalar routines.
-    pub wr: WatertightRay,
 }
 
 impl LeafRay {
     /// A stand-in for tests that take no shear (Moller-Trumbore).
-    pub const UNUSED: Self = Self { lanes: [[0.0; PW]; 6], rows: [0, 16, 32], wr: WatertightRay::UNUSED };
+    pub const UNUSED: Self = Self { c: [0.0; 6], rows: [0, 16, 32] };
 
     /// The leaf constants of `ray` (whose direction must not be the zero vector).
     #[inline]
     pub fn new(ray: &Ray) -> Self {
-        let wr = WatertightRay::new(ray.dir);
-        let o = ray.origin.to_array();
+        let wr = WatertightRay::of(ray.dir.as_ref());
+        let o: &[f32; 3] = ray.origin.as_ref();
         let ([kx, ky, kz], s) = (wr.k, wr.s);
-        Self {
-            lanes: [[o[kx]; PW], [o[ky]; PW], [o[kz]; PW], [s.x; PW], [s.y; PW], [s.z; PW]],
-            rows: wr.k.map(|a| 16 * a),
-            wr,
-        }
+        Self { c: [o[kx], o[ky], o[kz], s.x, s.y, s.z], rows: wr.k.map(|a| 16 * a) }
+    }
+
+    /// The shear for the scalar routines: [`WatertightRay::new`]'s answer for
+    /// the ray this was made from (the same permutation and constants, bit
+    /// for bit).
+    #[inline(always)]
+    pub fn wr(&self) -> WatertightRay {
+        WatertightRay { k: self.rows.map(|r| r / 16), s: Vec3::new(self.c[3], self.c[4], self.c[5]) }
     }
 }
 
@@ -233,7 +239,7 @@ impl TriPackets {
                 let l = zero.trailing_zeros() as usize;
                 zero &= zero - 1;
                 let (p, k) = (&pq[l / PW], l % PW);
-                if let Some((t, u, v)) = watertight(ray, &lr.wr, p.vertex(0, k), p.vertex(1, k), p.vertex(2, k)) {
+                if let Some((t, u, v)) = watertight(ray, &lr.wr(), p.vertex(0, k), p.vertex(1, k), p.vertex(2, k)) {
                     changed |= offer(best, ray, t, p.id[k], u, v);
                 }
             }
@@ -260,7 +266,7 @@ impl TriPackets {
                 let l = zero.trailing_zeros() as usize;
                 zero &= zero - 1;
                 let (p, k) = (&pq[l / PW], l % PW);
-                if watertight(ray, &lr.wr, p.vertex(0, k), p.vertex(1, k), p.vertex(2, k)).is_some() {
+                if watertight(ray, &lr.wr(), p.vertex(0, k), p.vertex(1, k), p.vertex(2, k)).is_some() {
                     return true;
                 }
             }
@@ -413,8 +419,8 @@ fn tri4_sse(
         // inside the 32-byte aligned packet: an aligned load in bounds.
         let base = p.v.as_ptr().cast::<u8>();
         let ld = |j: usize, axis: usize| _mm_load_ps(base.add(48 * j + lr.rows[axis]).cast::<f32>());
-        // The lanes are 16-byte rows of the 16-byte aligned `LeafRay`.
-        let lane = |i: usize| _mm_load_ps(lr.lanes[i].as_ptr());
+        // Constant `i` in every lane (a broadcast from memory inside the AVX2 walks).
+        let lane = |i: usize| _mm_set1_ps(lr.c[i]);
         watertight_lanes!(__m128, ld, lane, ray; _mm_sub_ps, _mm_mul_ps, _mm_add_ps, _mm_max_ps, _mm_min_ps,
             _mm_andnot_ps, _mm_or_ps, _mm_xor_ps, _mm_and_ps, _mm_div_ps, _mm_set1_ps, _mm_setzero_ps,
             _mm_cmpngt_ps, _mm_cmpge_ps, _mm_cmple_ps, _mm_movemask_ps)
@@ -453,8 +459,8 @@ unsafe fn tri8_avx(
                 _mm_load_ps(bq.add(off).cast::<f32>()),
             )
         };
-        // The lanes are 16-byte rows of the 16-byte aligned `LeafRay`, broadcast to both halves.
-        let lane = |i: usize| _mm256_broadcast_ps(&*lr.lanes[i].as_ptr().cast::<__m128>());
+        // Constant `i` in every lane (a broadcast from memory).
+        let lane = |i: usize| _mm256_set1_ps(lr.c[i]);
         watertight_lanes!(__m256, ld, lane, ray; _mm256_sub_ps, _mm256_mul_ps, _mm256_add_ps, _mm256_max_ps,
             _mm256_min_ps, _mm256_andnot_ps, _mm256_or_ps, _mm256_xor_ps, _mm256_and_ps, _mm256_div_ps,
             _mm256_set1_ps, _mm256_setzero_ps, _mm256_cmp_ps::<_CMP_NGT_UQ>, _mm256_cmp_ps::<_CMP_GE_OQ>,
@@ -661,6 +667,43 @@ mod tests {
     }
 
     #[test]
+    fn leaf_ray_keeps_the_scalar_shear() {
+        // `LeafRay::wr` (what the uncertain lanes and the scalar leaves use)
+        // is `WatertightRay::new` bit for bit, and the packet test's
+        // constants are the origin on its axes and its shear: directions with
+        // ties between the largest components, signed zeros, every octant.
+        let mut rng = Pcg32::new(0x4c52, 1);
+        let picks = [0.0, -0.0, 1.0, -1.0, 0.5, -0.5, 1e-30, -3e20];
+        let mut dirs: Vec<Vec3> = Vec::new();
+        for &x in &picks {
+            for &y in &picks {
+                for &z in &picks {
+                    dirs.push(Vec3::new(x, y, z));
+                }
+            }
+        }
+        dirs.extend((0..10_000).map(|_| Vec3::new(coord(&mut rng), coord(&mut rng), coord(&mut rng))));
+        let mut checked = 0;
+        for d in dirs {
+            if d == Vec3::ZERO || !d.is_finite() {
+                continue;
+            }
+            let origin = Vec3::new(coord(&mut rng), 2.0, -3.5);
+            let ray = Ray::new(origin, d);
+            let (lr, wr) = (LeafRay::new(&ray), WatertightRay::new(d));
+            let got = lr.wr();
+            assert_eq!(got.k, wr.k, "{d:?}");
+            assert_eq!(got.s.to_array().map(f32::to_bits), wr.s.to_array().map(f32::to_bits), "{d:?}");
+            let o = origin.to_array();
+            let expect = [o[wr.k[0]], o[wr.k[1]], o[wr.k[2]], wr.s.x, wr.s.y, wr.s.z];
+            assert_eq!(lr.c.map(f32::to_bits), expect.map(f32::to_bits), "{d:?}");
+            assert_eq!(lr.rows, wr.k.map(|a| 16 * a), "{d:?}");
+            checked += 1;
+        }
+        assert!(checked > 9_000, "{checked} directions checked");
+    }
+
+    #[test]
     fn watertight_lanes_are_the_scalar_routine() {
         // Every lane the SIMD test decides (hit or miss) is the scalar
         // routine's answer bit for bit, on every axis permutation of
@@ -697,7 +740,9 @@ mod tests {
                 for l in 0..PW * n {
                     let t = &pq[l / PW];
                     let k = l % PW;
-                    let scalar = watertight(&ray, &lr.wr, t.vertex(0, k), t.vertex(1, k), t.vertex(2, k));
+                    // The scalar routine with its own constants, not the LeafRay's.
+                    let wr = WatertightRay::new(ray.dir);
+                    let scalar = watertight(&ray, &wr, t.vertex(0, k), t.vertex(1, k), t.vertex(2, k));
                     cases += 1;
                     hits += usize::from(scalar.is_some());
                     if unc >> l & 1 != 0 {

@@ -352,7 +352,7 @@ macro_rules! closest {
                 $counts.leaf(cur.child, n);
                 let lr = lr.get_or_insert_with(|| shear::<$k>($ray));
                 if cur.count & ENTRY_LEAF != 0 {
-                    $self.prims.intersect_leaf::<$k>(cur.child, n, &mut r, &lr.wr, &mut best)
+                    $self.prims.intersect_leaf::<$k>(cur.child, n, &mut r, &lr.wr(), &mut best)
                 } else {
                     $self.packets_closest::<$k>(cur.child, n, &mut r, lr, &mut best, $simd)
                 }
@@ -437,7 +437,7 @@ macro_rules! any_hit {
                     $counts.leaf(node.child[l], n);
                     let lr = lr.get_or_insert_with(|| shear::<$k>($ray));
                     let hit = if count & ENTRY_LEAF != 0 {
-                        $self.prims.occluded_leaf::<$k>(node.child[l], n, $ray, &lr.wr)
+                        $self.prims.occluded_leaf::<$k>(node.child[l], n, $ray, &lr.wr())
                     } else {
                         $self.packets_any::<$k>(node.child[l], n, $ray, lr, $simd)
                     };
@@ -920,7 +920,7 @@ impl WideBvh {
             };
         }
         let _ = simd;
-        pk.intersect_leaf_scalar::<K>(first, count, ray, &lr.wr, best)
+        pk.intersect_leaf_scalar::<K>(first, count, ray, &lr.wr(), best)
     }
 
     /// Any-hit test of a triangle leaf (see [`Self::packets_closest`]).
@@ -942,7 +942,7 @@ impl WideBvh {
             };
         }
         let _ = simd;
-        pk.occluded_leaf_scalar::<K>(first, count, ray, &lr.wr)
+        pk.occluded_leaf_scalar::<K>(first, count, ray, &lr.wr())
     }
 
     #[inline(always)]

@@ -719,7 +719,7 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize, const P: bool>(
                     unc &= unc - 1;
                     let w = wr[i].get_or_insert_with(|| LeafRay::new(&r[i]));
                     let (v0, v1, v2) = (p.vertex(0, l), p.vertex(1, l), p.vertex(2, l));
-                    if let Some((t, u, v2)) = K::intersect(&r[i], &w.wr, v0, v1, v2) {
+                    if let Some((t, u, v2)) = K::intersect(&r[i], &w.wr(), v0, v1, v2) {
                         closer |= Hit::offer(&mut best[i], &mut r[i], Hit { t, prim: p.id[l], u, v: v2 });
                     }
                 }
@@ -751,7 +751,7 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize, const P: bool>(
                 m &= m - 1;
                 let w = wr[i].get_or_insert_with(|| LeafRay::new(&r[i]));
                 let closer = if cur.count & ENTRY_LEAF != 0 {
-                    bvh.prims.intersect_leaf::<K>(cur.child, c, &mut r[i], &w.wr, &mut best[i])
+                    bvh.prims.intersect_leaf::<K>(cur.child, c, &mut r[i], &w.wr(), &mut best[i])
                 } else {
                     bvh.packets_closest::<K>(cur.child, c, &mut r[i], w, &mut best[i], true)
                 };
@@ -1010,7 +1010,7 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool>(
                         unc &= unc - 1;
                         let w = wr[i].get_or_insert_with(|| LeafRay::new(&rays[i]));
                         let (v0, v1, v2) = (p.vertex(0, pl), p.vertex(1, pl), p.vertex(2, pl));
-                        if K::intersect(&rays[i], &w.wr, v0, v1, v2).is_some() {
+                        if K::intersect(&rays[i], &w.wr(), v0, v1, v2).is_some() {
                             hit |= 1 << i;
                         }
                     }
@@ -1029,7 +1029,7 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool>(
                 let r = &rays[i];
                 let w = wr[i].get_or_insert_with(|| LeafRay::new(r));
                 let hit = if count & ENTRY_LEAF != 0 {
-                    bvh.prims.occluded_leaf::<K>(node.child[l], c, r, &w.wr)
+                    bvh.prims.occluded_leaf::<K>(node.child[l], c, r, &w.wr())
                 } else {
                     bvh.packets_any::<K>(node.child[l], c, r, w, true)
                 };

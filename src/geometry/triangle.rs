@@ -123,7 +123,16 @@ impl WatertightRay {
     /// Precompute the shear for `dir` (must not be the zero vector).
     #[inline]
     pub fn new(dir: Vec3) -> Self {
-        let a = dir.abs();
+        Self::of(dir.as_ref())
+    }
+
+    /// [`Self::new`] of the direction `d`, read in place: given a ray's
+    /// direction in memory, each component is one load from it, with no copy
+    /// of the direction (a copy made as two stores and read back as one
+    /// overlapping load stalls on store forwarding).
+    #[inline(always)]
+    pub fn of(d: &[f32; 3]) -> Self {
+        let a = Vec3::from_array(*d).abs();
         let kz = if a.x >= a.y && a.x >= a.z {
             0
         } else if a.y >= a.z {
@@ -131,15 +140,14 @@ impl WatertightRay {
         } else {
             2
         };
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
-        // Keep the winding of the edge functions independent of the sign of dir[kz].
-        // Array indexing (one load) rather than glam's `Index`, a three-way match.
-        let d = dir.to_array();
-        if d[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
+        // The next two axes in cyclic order, swapped when `dir[kz] < 0` to keep
+        // the winding of the edge functions independent of its sign: one
+        // table row per (kz, sign), instead of `% 3` arithmetic and a swap.
+        const XY: [[usize; 2]; 6] = [[1, 2], [2, 1], [2, 0], [0, 2], [0, 1], [1, 0]];
+        // Indexing the direction (one load each) rather than glam's `Index`, a
+        // three-way match.
         let dz = d[kz];
+        let [kx, ky] = XY[2 * kz + usize::from(dz < 0.0)];
         Self { k: [kx, ky, kz], s: Vec3::new(d[kx] / dz, d[ky] / dz, 1.0 / dz) }
     }
 }
