@@ -155,21 +155,28 @@ impl WidePre {
     }
 }
 
-/// The leaf constants of `ray` ([`LeafRay`]: the watertight test's shear),
-/// made out of line at a ray's first leaf: most rays of a mesh that does not
-/// fill the view reach none, and keeping it out of the traversal's entry
-/// keeps the compiler from computing it ahead for every ray.
+/// The leaf constants of `ray` ([`LeafRay`]: the watertight test's shear).
+///
+/// The walks make them in line, ahead of the first leaf: the closest-hit
+/// walk at the first node where the ray enters a leaf's box, the any-hit walk
+/// (whose shadow rays nearly all reach a leaf) at the first node it enters.
+/// Their divisions then run beside the box tests that lead to the leaf
+/// instead of delaying its test, as they did when made out of line at the
+/// first leaf. Rays that enter no leaf's box (most camera rays of a mesh that
+/// does not fill the view) make none. `rtdiff bench --race 7 --threads 1`,
+/// alternated binaries, against Embree's default mode: suzanne incoherent
+/// 0.868-0.870 -> 0.902-0.909 (robust MEDIUM 1.037-1.048 -> 1.075-1.089),
+/// shadow 0.93-1.00 -> 0.94-1.01; dragon_87k shadow 1.095-1.113 ->
+/// 1.125-1.133, primary 1.031-1.042 -> 1.012-1.020 (the cost: rays that
+/// enter a leaf's box but hit nothing there). Made at the closest-hit walk's
+/// first entered node instead, suzanne gained as much and dragon_87k's camera
+/// rays lost more (0.996-1.012).
 ///
 /// Tests other than the watertight one take no shear: for them this is
-/// [`LeafRay::UNUSED`], made in line.
+/// [`LeafRay::UNUSED`].
 #[inline(always)]
 fn shear<K: TriangleKernel>(ray: &Ray) -> LeafRay {
-    #[cold]
-    #[inline(never)]
-    fn made(ray: &Ray) -> LeafRay {
-        LeafRay::new(ray)
-    }
-    if K::WATERTIGHT { made(ray) } else { LeafRay::UNUSED }
+    if K::WATERTIGHT { LeafRay::new(ray) } else { LeafRay::UNUSED }
 }
 
 /// Scalar 8-lane box test: hit mask and entry distances (the arithmetic of
@@ -286,9 +293,11 @@ macro_rules! closest {
     ($self:ident, $ray:ident, $start:expr, $k:ty, $pre:ident, $box8:ident, $simd:expr, $counts:expr, $stack:expr, $pf:expr) => {{
         let pre = WidePre::new($ray);
         let q = $pre!(&pre);
-        // The shear of the triangle test is made at the first leaf: most
-        // camera rays of a mesh that does not fill the view reach none.
-        let mut lr: Option<LeafRay> = None;
+        // The shear of the triangle test, made at the first node where the
+        // ray enters a leaf's box (see `shear`): every leaf visited was
+        // entered so before.
+        let mut lr = LeafRay::UNUSED;
+        let mut made = false;
         let mut r = *$ray;
         let mut best: Option<Hit> = None;
         let mut cull = cull_bound(r.t_max);
@@ -302,6 +311,10 @@ macro_rules! closest {
                 $counts.node(cur.child);
                 let (mut mask, near) = $box8!(node, &q, cull);
                 if mask != 0 {
+                    if !made && mask & !node.inner_lanes() != 0 {
+                        made = true;
+                        lr = shear::<$k>($ray);
+                    }
                     if $pf {
                         $self.prefetch_children(node, mask);
                     }
@@ -350,11 +363,11 @@ macro_rules! closest {
             } else if {
                 let n = cur.count & !ENTRY_LEAF;
                 $counts.leaf(cur.child, n);
-                let lr = lr.get_or_insert_with(|| shear::<$k>($ray));
+                debug_assert!(made || !<$k as TriangleKernel>::WATERTIGHT, "a leaf before its shear");
                 if cur.count & ENTRY_LEAF != 0 {
                     $self.prims.intersect_leaf::<$k>(cur.child, n, &mut r, &lr.wr(), &mut best)
                 } else {
-                    $self.packets_closest::<$k>(cur.child, n, &mut r, lr, &mut best, $simd)
+                    $self.packets_closest::<$k>(cur.child, n, &mut r, &lr, &mut best, $simd)
                 }
             } {
                 $counts.closer();
@@ -382,7 +395,10 @@ macro_rules! any_hit {
     ($self:ident, $ray:ident, $start:expr, $k:ty, $pre:ident, $box8:ident, $simd:expr, $counts:expr, $stack:expr, $pf:expr) => {{
         let pre = WidePre::new($ray);
         let q = $pre!(&pre);
-        let mut lr: Option<LeafRay> = None;
+        // The shear, made at the first node the ray enters (see `shear`),
+        // before any leaf is tested.
+        let mut lr = LeafRay::UNUSED;
+        let mut at_root = true;
         let cull = cull_bound($ray.t_max);
         // Only inner nodes are stacked: hit leaves are tested at once, so an
         // occluder is found before descending further.
@@ -400,6 +416,10 @@ macro_rules! any_hit {
             let node = &nodes[cur as usize];
             $counts.node(cur);
             let (mut mask, near) = $box8!(node, &q, cull);
+            if at_root && mask != 0 {
+                at_root = false;
+                lr = shear::<$k>($ray);
+            }
             // The nearest of the entered inner nodes is stacked first, so it
             // is searched last: a shadow ray leaves a surface, whose own
             // subtree is the nearest and cannot occlude it. (Same answers in
@@ -435,11 +455,10 @@ macro_rules! any_hit {
                 if count > 0 {
                     let n = count & !ENTRY_LEAF;
                     $counts.leaf(node.child[l], n);
-                    let lr = lr.get_or_insert_with(|| shear::<$k>($ray));
                     let hit = if count & ENTRY_LEAF != 0 {
                         $self.prims.occluded_leaf::<$k>(node.child[l], n, $ray, &lr.wr())
                     } else {
-                        $self.packets_any::<$k>(node.child[l], n, $ray, lr, $simd)
+                        $self.packets_any::<$k>(node.child[l], n, $ray, &lr, $simd)
                     };
                     if hit {
                         return true;
