@@ -47,7 +47,7 @@ impl Tri4 {
 }
 
 /// A ray's constants for the leaf tests of the `fast` traversal, made once
-/// per ray at its first leaf: the watertight test's shear and axis
+/// per ray ahead of its first leaf (`wide::shear`): the watertight test's shear and axis
 /// permutation, kept as the packet test reads them (the origin on the
 /// permuted axes, the shear constants, and the byte offsets of the permuted
 /// axes' rows in a [`Tri4`]); the scalar routines' [`WatertightRay`] is
