@@ -334,8 +334,46 @@ macro_rules! closest {
                         cur = Entry { t: near[a], child: node.child[a], count: node.count[a] };
                         continue 'outer;
                     }
-                    // Sort the hit lanes by entry distance (insertion sort, at most 8).
-                    // Ties keep the lower lane first.
+                    let k = mask.count_ones() as usize + 1;
+                    if k <= 4 {
+                        // Three or four hits: a sorting network on keys that
+                        // order by entry distance, then lane (ties keep the
+                        // lower lane first, as the insertion sort below),
+                        // compare-exchanges without data-dependent branches.
+                        // The key: the distance's bits made to sort as unsigned
+                        // integers (negatives flipped; -0 made +0), the lane below.
+                        let key = |l: usize| -> u64 {
+                            let b = (near[l] + 0.0).to_bits();
+                            let u = b ^ ((((b as i32) >> 31) as u32) | 0x8000_0000);
+                            (u64::from(u) << 32) | l as u64
+                        };
+                        let mut m = mask;
+                        let l1 = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        let l2 = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        // A fourth key, or one that sorts last.
+                        let k3 = if m != 0 { key((m.trailing_zeros() as usize) & (WIDTH - 1)) } else { u64::MAX };
+                        let mut s = [key(first), key(l1), key(l2), k3];
+                        for (i, j) in [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)] {
+                            let (lo, hi) = (s[i].min(s[j]), s[i].max(s[j]));
+                            (s[i], s[j]) = (lo, hi);
+                        }
+                        let entry = |key: u64| {
+                            let l = (key as usize) & (WIDTH - 1);
+                            Entry { t: near[l], child: node.child[l], count: node.count[l] }
+                        };
+                        // The farthest deepest: s[3] (with three hits the
+                        // padding, overwritten by s[2]), s[2], s[1] on top.
+                        stack[sp] = MaybeUninit::new(entry(s[3]));
+                        stack[sp + k - 3] = MaybeUninit::new(entry(s[2]));
+                        stack[sp + k - 2] = MaybeUninit::new(entry(s[1]));
+                        sp += k - 1;
+                        cur = entry(s[0]);
+                        continue 'outer;
+                    }
+                    // Five or more: sort the hit lanes by entry distance
+                    // (insertion sort). Ties keep the lower lane first.
                     let mut lanes = [(0.0f32, 0u32); WIDTH];
                     lanes[0] = (near[first], first as u32);
                     let mut k = 1;
