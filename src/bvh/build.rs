@@ -256,11 +256,12 @@ pub struct BuiltTree {
 pub fn build_tree(prims: &Primitives, splitter: &dyn Splitter) -> BuiltTree {
     let input = BuildInput::new(prims, splitter.needs_vertex_means());
     let mut refs = prim_refs(prims);
-    let mut nodes = Vec::with_capacity(2 * prims.len().max(1));
+    let mut root = Piece { nodes: Vec::with_capacity(2 * prims.len().max(1)), forks: Vec::new(), base: 0 };
     if !refs.is_empty() {
-        let (root, centroids) = root_bounds(&refs);
-        build_node(splitter, &input, &mut refs, root.aabb(), Some(centroids), 0, 0, &mut nodes);
+        let (bounds, centroids) = root_bounds(&refs);
+        build_node(splitter, &input, &mut refs, bounds.aabb(), Some(centroids), 0, 0, &mut root.nodes, &mut root.forks);
     }
+    let nodes = root.flatten();
     let order = if parallel_pass(refs.len()) {
         refs.par_iter().with_min_len(PARALLEL_PASS).map(PrimRef::id).collect()
     } else {
@@ -277,6 +278,10 @@ pub fn build_with(prims: &Primitives, splitter: &dyn Splitter, builder: Builder)
     BinaryBvh { nodes: tree.nodes, prims: leaf_prims, builder, build_time: start.elapsed() }
 }
 
+/// Build the subtree over `idx` (box `bounds`, primitives from `first` on,
+/// at level `depth`) depth-first at the end of `out`. At a fork the right
+/// subtree is built apart, on the pool, into a [`Piece`] pushed on `forks`
+/// (the list of the piece that `out` belongs to).
 #[allow(clippy::too_many_arguments)]
 fn build_node(
     s: &dyn Splitter,
@@ -287,6 +292,7 @@ fn build_node(
     first: u32,
     depth: u32,
     out: &mut Vec<Node>,
+    forks: &mut Vec<(u32, Piece)>,
 ) {
     let n = idx.len();
     let me = out.len();
@@ -306,56 +312,115 @@ fn build_node(
     // On a one-thread pool the fork would only add copies of the subtrees.
     if n >= PARALLEL_THRESHOLD && rayon::current_num_threads() > 1 {
         // The left subtree goes straight into `out` (right after this node,
-        // as in the sequential order); only the right one is built apart and
-        // copied after it.
-        let ((), rv) = rayon::join(
-            || build_node(s, input, l, lb, None, first, depth + 1, out),
+        // as in the sequential order); the right one into a piece of its
+        // own, put in place once the whole tree is built.
+        let ((), right) = rayon::join(
+            || build_node(s, input, l, lb, None, first, depth + 1, out, forks),
             || {
-                let mut v = Vec::with_capacity(2 * r.len());
-                build_node(s, input, r, rb, None, right_first, depth + 1, &mut v);
-                v
+                let mut piece = Piece { nodes: Vec::with_capacity(r.len()), forks: Vec::new(), base: 0 };
+                build_node(s, input, r, rb, None, right_first, depth + 1, &mut piece.nodes, &mut piece.forks);
+                piece
             },
         );
-        let right = out.len() as u32;
-        append_shifted(out, &rv);
-        out[me] = Node::interior(bounds, right);
+        // The link is set when the pieces are laid out (`Piece::lay_out`).
+        out[me] = Node::interior(bounds, u32::MAX);
+        forks.push((me as u32, right));
     } else {
-        build_node(s, input, l, lb, None, first, depth + 1, out);
+        build_node(s, input, l, lb, None, first, depth + 1, out, forks);
         let right = out.len() as u32;
-        build_node(s, input, r, rb, None, right_first, depth + 1, out);
+        build_node(s, input, r, rb, None, right_first, depth + 1, out, forks);
         out[me] = Node::interior(bounds, right);
     }
 }
 
-/// Append a subtree built with local node indices, shifting its child links.
+/// Part of a tree built on its own: depth-first nodes whose links are
+/// indices into `nodes`, except at the forks, whose right subtrees are
+/// pieces of their own.
 ///
-/// Large subtrees are copied in parallel pieces of [`PARALLEL_PASS`] nodes:
-/// the copies at the top forks come last in the build, with the other thread
-/// idle, and they write memory no one has touched yet (its page faults
-/// included). dragon_full on two threads, a throwaway timer: the root's copy
-/// (184,000 nodes) took 3.2-3.4 ms and those one level down up to 3.0 ms.
-fn append_shifted(out: &mut Vec<Node>, sub: &[Node]) {
-    let base = out.len() as u32;
-    let shifted = |n: &Node| if n.is_leaf() { *n } else { Node { offset: n.offset + base, ..*n } };
-    if !parallel_pass(sub.len()) {
-        out.extend(sub.iter().map(shifted));
-        return;
-    }
-    out.reserve(sub.len());
-    let start = out.len();
-    out.spare_capacity_mut()[..sub.len()].par_chunks_mut(PARALLEL_PASS).zip(sub.par_chunks(PARALLEL_PASS)).for_each(
-        |(dst, src)| {
-            for (d, n) in dst.iter_mut().zip(src) {
-                d.write(shifted(n));
+/// Below a node that does not fork nothing forks (a fork needs more
+/// primitives), so a piece's forks lie on its leftmost path and the deepest
+/// ends first: in depth-first order the piece's nodes come first, then the
+/// forks' pieces in the order they were pushed. Each node is copied once,
+/// into its place in the final array. (Until stop 36 each right subtree was
+/// copied into its parent's array at its fork, and so again at every fork
+/// above it whose right side it was in: dragon_full forks down ten levels.
+/// Callgrind, instructions per build of dragon_87k through `build_tracer`,
+/// `examples/call_path.rs` `build`: one thread 161.7M; two threads 166.7M
+/// before, 164.0M with the pieces.)
+struct Piece {
+    /// The piece's nodes, depth-first.
+    nodes: Vec<Node>,
+    /// Each fork's index in `nodes` and the piece of its right subtree, deepest fork first.
+    forks: Vec<(u32, Piece)>,
+    /// Index of the piece's first node in the final array (set by [`Self::lay_out`]).
+    base: u32,
+}
+
+impl Piece {
+    /// The whole tree in one depth-first array (`self` is the root's piece).
+    fn flatten(mut self) -> Vec<Node> {
+        if self.forks.is_empty() {
+            return self.nodes;
+        }
+        let total = self.lay_out(0);
+        let mut rest: Vec<&Piece> = Vec::new();
+        for (_, p) in &self.forks {
+            p.preorder(&mut rest);
+        }
+        let mut out = self.nodes;
+        let start = out.len();
+        out.reserve(total as usize - start);
+        // Cut the room after the root's nodes into one slot range per piece
+        // (depth-first order is increasing `base`), in pieces of at most
+        // `PARALLEL_PASS` nodes.
+        let mut jobs = Vec::new();
+        let mut room = &mut out.spare_capacity_mut()[..total as usize - start];
+        for p in rest {
+            let (dst, tail) = room.split_at_mut(p.nodes.len());
+            room = tail;
+            for (d, s) in dst.chunks_mut(PARALLEL_PASS).zip(p.nodes.chunks(PARALLEL_PASS)) {
+                jobs.push((d, s, p.base));
             }
-        },
-    );
-    // (rayon's `par_extend` over `sub.par_iter().with_min_len(..).map(..)`
-    // does the same without `unsafe`, but measured slower: dragon_full's
-    // two-thread build-cold 117.0-131.6 -> 122.2-146.6 ms, four alternated pairs.)
-    // SAFETY: the `sub.len()` slots after `start` were reserved above, and the
-    // pieces, cut alike from them and from `sub`, wrote every one.
-    unsafe { out.set_len(start + sub.len()) };
+        }
+        debug_assert!(room.is_empty());
+        let copy = |(dst, src, base): (&mut [std::mem::MaybeUninit<Node>], &[Node], u32)| {
+            for (d, n) in dst.iter_mut().zip(src) {
+                d.write(if n.is_leaf() { *n } else { Node { offset: n.offset + base, ..*n } });
+            }
+        };
+        if parallel_pass(total as usize - start) {
+            jobs.into_par_iter().for_each(copy);
+        } else {
+            jobs.into_iter().for_each(copy);
+        }
+        // SAFETY: the `total - start` slots after `start` were reserved above,
+        // and the jobs, cut alike from them and from the pieces' nodes (which
+        // number exactly `total - start`, by `lay_out`), wrote every one.
+        unsafe { out.set_len(total as usize) };
+        out
+    }
+
+    /// Place this piece at `base` and its forks' pieces after it, and point
+    /// each fork at its right subtree (relative to `base`, as the piece's
+    /// other links are until the copy adds `base`). Returns the index after
+    /// the last node placed.
+    fn lay_out(&mut self, base: u32) -> u32 {
+        self.base = base;
+        let mut next = base + self.nodes.len() as u32;
+        for (at, p) in &mut self.forks {
+            self.nodes[*at as usize].offset = next - base;
+            next = p.lay_out(next);
+        }
+        next
+    }
+
+    /// This piece and its forks' pieces in depth-first (increasing `base`) order.
+    fn preorder<'a>(&'a self, out: &mut Vec<&'a Piece>) {
+        out.push(self);
+        for (_, p) in &self.forks {
+            p.preorder(out);
+        }
+    }
 }
 
 /// Move the entries of `idx` satisfying `left` to the front; returns how many there are.
@@ -372,4 +437,80 @@ pub fn partition<T>(idx: &mut [T], mut left: impl FnMut(&T) -> bool) -> usize {
         }
     }
     i
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+    use crate::bvh::build_median::MedianSplit;
+    use crate::bvh::build_sah::SahSplit;
+    use crate::geometry::Triangle;
+    use crate::rng::Pcg32;
+
+    /// `n` small random triangles in a unit cube.
+    fn scattered(n: usize, seed: u64) -> Primitives {
+        let mut rng = Pcg32::new(seed, 0);
+        let mut p = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+        let triangles = (0..n)
+            .map(|_| {
+                let c = p();
+                Triangle { v: [c, c + 0.01 * p(), c + 0.01 * p()] }
+            })
+            .collect();
+        Primitives { triangles, spheres: Vec::new() }
+    }
+
+    /// Every interior link points past its node and at a node whose
+    /// primitives follow its left sibling's, every leaf range lies inside
+    /// the order, and every primitive is in exactly one leaf.
+    fn check_links(tree: &BuiltTree) {
+        let mut seen = vec![0u32; tree.order.len()];
+        let mut stack = vec![(0usize, 0u32, tree.order.len() as u32)];
+        while let Some((i, first, count)) = stack.pop() {
+            let n = &tree.nodes[i];
+            if n.is_leaf() {
+                assert_eq!((n.offset, n.count), (first, count), "leaf {i}");
+                for k in first..first + count {
+                    seen[k as usize] += 1;
+                }
+                continue;
+            }
+            let (l, r) = (i + 1, n.offset as usize);
+            assert!(r > l && r < tree.nodes.len(), "node {i} links to {r}");
+            let lc = leaf_span(&tree.nodes, l);
+            stack.push((l, first, lc));
+            stack.push((r, first + lc, count - lc));
+        }
+        assert!(seen.iter().all(|&s| s == 1), "a primitive is in no leaf or in two");
+    }
+
+    /// Number of primitives under node `i`.
+    fn leaf_span(nodes: &[Node], i: usize) -> u32 {
+        let n = &nodes[i];
+        if n.is_leaf() { n.count } else { leaf_span(nodes, i + 1) + leaf_span(nodes, n.offset as usize) }
+    }
+
+    /// The binary tree built on two threads (its right subtrees built apart
+    /// in pieces, laid out once at the end) is node for node the one-thread
+    /// tree, for the SAH builder and for the median builder's one-primitive
+    /// leaves (the most nodes, the deepest forks).
+    #[test]
+    fn two_threads_lay_out_the_one_thread_tree() {
+        let prims = scattered(60_000, 7);
+        let sah = SahSplit { bins: 16, block: crate::bvh::packet::leaf_block(prims.len()) };
+        let median = MedianSplit { leaf_size: 1 };
+        for splitter in [&sah as &dyn Splitter, &median] {
+            let build = |threads: usize| {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                pool.install(|| build_tree(&prims, splitter))
+            };
+            let (a, b) = (build(1), build(2));
+            assert!(a.nodes.len() > 10_000);
+            check_links(&a);
+            assert!(a.nodes == b.nodes, "1 and 2 threads laid out different nodes");
+            assert_eq!(a.order, b.order);
+        }
+    }
 }
