@@ -441,26 +441,10 @@ pub fn partition<T>(idx: &mut [T], mut left: impl FnMut(&T) -> bool) -> usize {
 
 #[cfg(test)]
 mod tests {
-    use glam::Vec3;
-
     use super::*;
     use crate::bvh::build_median::MedianSplit;
     use crate::bvh::build_sah::SahSplit;
-    use crate::geometry::Triangle;
-    use crate::rng::Pcg32;
-
-    /// `n` small random triangles in a unit cube.
-    fn scattered(n: usize, seed: u64) -> Primitives {
-        let mut rng = Pcg32::new(seed, 0);
-        let mut p = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
-        let triangles = (0..n)
-            .map(|_| {
-                let c = p();
-                Triangle { v: [c, c + 0.01 * p(), c + 0.01 * p()] }
-            })
-            .collect();
-        Primitives { triangles, spheres: Vec::new() }
-    }
+    use crate::bvh::collapse::tests::scattered;
 
     /// Every interior link points past its node and at a node whose
     /// primitives follow its left sibling's, every leaf range lies inside

@@ -381,7 +381,7 @@ pub fn collapse(bin: &[Node], block: u32) -> Vec<WideNode> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use glam::Vec3;
 
     use super::*;
@@ -390,7 +390,7 @@ mod tests {
     use crate::rng::Pcg32;
 
     /// Small random triangles scattered in a unit cube.
-    fn scattered(n: usize, seed: u64) -> Primitives {
+    pub(crate) fn scattered(n: usize, seed: u64) -> Primitives {
         let mut rng = Pcg32::new(seed, 0);
         let mut p = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
         let triangles = (0..n)

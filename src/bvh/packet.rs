@@ -281,12 +281,8 @@ impl TriPackets {
         // callgrind, 20,000 rays: suzanne incoherent 11.86M -> 13.61M.)
         let mut changed = false;
         for pq in self.packets[first as usize..first as usize + packets_for(count)].chunks(2) {
-            let (mut ok, [t, u, v]) = moller_trumbore_pair(pq, ray);
-            while ok != 0 {
-                let l = ok.trailing_zeros() as usize;
-                ok &= ok - 1;
-                changed |= offer(best, ray, t[l], pq[l / PW].id[l % PW], u[l], v[l]);
-            }
+            let (ok, rows) = moller_trumbore_pair(pq, ray);
+            changed |= offer_lanes(ok, pq, &rows, ray, best);
         }
         changed
     }
@@ -476,7 +472,7 @@ unsafe fn tri8_avx(
 #[inline(always)]
 fn closest_pair(pq: &[Tri4], ray: &mut Ray, lr: &LeafRay, best: &mut Option<Hit>) -> bool {
     let mut changed = false;
-    let (ok, mut zero, [t, u, v]) = watertight_pair(pq, ray, lr);
+    let (ok, mut zero, rows) = watertight_pair(pq, ray, lr);
     while zero != 0 {
         let l = zero.trailing_zeros() as usize;
         zero &= zero - 1;
@@ -485,11 +481,18 @@ fn closest_pair(pq: &[Tri4], ray: &mut Ray, lr: &LeafRay, best: &mut Option<Hit>
             changed |= offer(best, ray, t, p.id[k], u, v);
         }
     }
-    let mut ok = ok;
+    changed |= offer_lanes(ok, pq, &rows, ray, best);
+    changed
+}
+
+/// Offer the hits of lanes `ok` of packets `pq` (`rows`: their `t, u, v`) under [`Hit::offer`]'s tie rule.
+#[inline(always)]
+fn offer_lanes(mut ok: u32, pq: &[Tri4], rows: &[[f32; 2 * PW]; 3], ray: &mut Ray, best: &mut Option<Hit>) -> bool {
+    let mut changed = false;
     while ok != 0 {
         let l = ok.trailing_zeros() as usize;
         ok &= ok - 1;
-        changed |= offer(best, ray, t[l], pq[l / PW].id[l % PW], u[l], v[l]);
+        changed |= offer(best, ray, rows[0][l], pq[l / PW].id[l % PW], rows[1][l], rows[2][l]);
     }
     changed
 }
