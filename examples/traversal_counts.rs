@@ -15,6 +15,20 @@ use rtdiff::geometry::offset::SpawnOffset;
 use rtdiff::perf::bench::{RaySets, SHADOW_LIGHTS};
 use rtdiff::rays::workload::shadow_rays;
 
+/// Print one line on stdout; a closed pipe (`| head`) ends the program
+/// quietly, another write error with a message and exit status 1.
+fn line(args: std::fmt::Arguments) {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    if let Err(e) = out.write_fmt(args).and_then(|()| out.write_all(b"\n")) {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            std::process::exit(0);
+        }
+        eprintln!("traversal_counts: cannot write to stdout: {e}");
+        std::process::exit(1);
+    }
+}
+
 fn main() -> rtdiff::Result<()> {
     let mut args = std::env::args().skip(1);
     let path = args.next().unwrap_or_else(|| "assets/dragon_87k.obj".into());
@@ -22,8 +36,11 @@ fn main() -> rtdiff::Result<()> {
     let prims = rtdiff::rays::load_primitives(std::path::Path::new(&path), true)?;
     let cfg = AccelConfig { builder: Builder::Sah, bins, ..Default::default() };
     let bvh = rtdiff::bvh::build_wide(&prims, &cfg);
-    println!("{path}: {} primitives, {} wide nodes", prims.len(), bvh.nodes.len());
-    println!("{:<22} {:>10} {:>10} {:>12} {:>14}", "rays", "nodes/ray", "leaves/ray", "packets/ray", "packets/leaf");
+    line(format_args!("{path}: {} primitives, {} wide nodes", prims.len(), bvh.nodes.len()));
+    line(format_args!(
+        "{:<22} {:>10} {:>10} {:>12} {:>14}",
+        "rays", "nodes/ray", "leaves/ray", "packets/ray", "packets/leaf"
+    ));
     let reference = build_tracer(prims.clone(), &cfg)?;
     let sets = RaySets::new(&prims, 512, 262_144, reference.as_ref());
     let hits: Vec<_> = sets.primary.iter().map(|r| reference.intersect(r)).collect();
@@ -44,7 +61,13 @@ fn main() -> rtdiff::Result<()> {
         }
         let per = |x: u64| x as f64 / c.rays as f64;
         let ppl = c.packets as f64 / c.leaves.max(1) as f64;
-        println!("{name:<22} {:>10.3} {:>10.3} {:>12.3} {:>14.3}", per(c.nodes), per(c.leaves), per(c.packets), ppl);
+        line(format_args!(
+            "{name:<22} {:>10.3} {:>10.3} {:>12.3} {:>14.3}",
+            per(c.nodes),
+            per(c.leaves),
+            per(c.packets),
+            ppl
+        ));
     }
     Ok(())
 }
