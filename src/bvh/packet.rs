@@ -227,10 +227,12 @@ impl TriPackets {
     /// [`crate::bvh::build_sah::SAH_MAX_LEAF`] and the collapse's
     /// [`crate::bvh::collapse::MAX_LEAF`] are eight triangles) take one pair
     /// test without the loop over pairs (its set-up: the slice's chunk
-    /// arithmetic and the registers saved around the loop). Callgrind, 20,000
+    /// arithmetic and the registers saved around the loop; an empty leaf
+    /// takes the loop, which tests nothing). Callgrind, 20,000
     /// rays through `examples/call_path.rs`, with the any-hit form alike:
     /// suzanne incoherent 14.02M -> 13.55M instructions, shadow 18.19M ->
-    /// 17.56M; dragon_87k primary 21.20M -> 20.16M, shadow 26.99M -> 26.12M.
+    /// 17.56M; dragon_87k primary 21.20M -> 20.16M, shadow 26.99M -> 26.12M
+    /// (`offer_lanes`, added after, moved these by under 1%).
     /// `rtdiff bench --race 5 --threads 1`, alternated binaries, against
     /// Embree's default mode: suzanne incoherent 0.943-0.944 -> 0.951-0.969,
     /// shadow 0.996-1.008 -> 1.013-1.016; dragon_87k primary 0.879-1.006 ->
@@ -247,7 +249,7 @@ impl TriPackets {
         best: &mut Option<Hit>,
     ) -> bool {
         let pks = &self.packets[first as usize..first as usize + packets_for(count)];
-        if pks.len() <= 2 {
+        if matches!(pks.len(), 1 | 2) {
             return closest_pair(pks, ray, lr, best);
         }
         let mut changed = false;
@@ -264,7 +266,7 @@ impl TriPackets {
     #[inline(always)]
     pub fn occluded_leaf_simd(&self, first: u32, count: u32, ray: &Ray, lr: &LeafRay) -> bool {
         let pks = &self.packets[first as usize..first as usize + packets_for(count)];
-        if pks.len() <= 2 {
+        if matches!(pks.len(), 1 | 2) {
             return occluded_pair(pks, ray, lr);
         }
         pks.chunks(2).any(|pq| occluded_pair(pq, ray, lr))
@@ -292,7 +294,7 @@ impl TriPackets {
     #[inline(always)]
     pub fn occluded_leaf_simd_mt(&self, first: u32, count: u32, ray: &Ray) -> bool {
         let pks = &self.packets[first as usize..first as usize + packets_for(count)];
-        if pks.len() <= 2 {
+        if matches!(pks.len(), 1 | 2) {
             return moller_trumbore_pair(pks, ray).0 != 0;
         }
         pks.chunks(2).any(|pq| moller_trumbore_pair(pq, ray).0 != 0)
@@ -750,6 +752,31 @@ mod tests {
             checked += 1;
         }
         assert!(checked > 9_000, "{checked} directions checked");
+    }
+
+    /// A leaf of no triangles tests nothing and reports nothing (the one-pair
+    /// form of the SIMD leaf tests is for leaves of one or two packets only).
+    #[test]
+    fn an_empty_leaf_has_no_hit() {
+        let mut pk = TriPackets { packets: Vec::new() };
+        let tri = |_: usize| ([glam::Vec3::new(-1.0, -1.0, 1.0), glam::Vec3::new(1.0, -1.0, 1.0), glam::Vec3::Y], 0);
+        pk.push_leaf_with(0, 1, tri);
+        let mut ray = Ray::new(glam::Vec3::ZERO, glam::Vec3::Z);
+        let lr = LeafRay::new(&ray);
+        let mut best = None;
+        // The triangle is in the way: the one-triangle leaf hits it (scalar, so any CPU runs this).
+        assert!(pk.intersect_leaf_scalar::<crate::geometry::triangle::Watertight>(
+            0,
+            1,
+            &mut ray.clone(),
+            &lr.wr(),
+            &mut best
+        ));
+        best = None;
+        assert!(!pk.intersect_leaf_simd(0, 0, &mut ray, &lr, &mut best));
+        assert!(best.is_none());
+        assert!(!pk.occluded_leaf_simd(0, 0, &ray, &lr));
+        assert!(!pk.occluded_leaf_simd_mt(0, 0, &ray));
     }
 
     #[test]
