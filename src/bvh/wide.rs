@@ -936,6 +936,17 @@ impl WideBvh {
                 if n as usize <= super::packet::PW {
                     continue;
                 }
+                if n as usize <= 2 * super::packet::PW {
+                    // Two packets (every SAH leaf has at most eight
+                    // triangles): 320 bytes, five or six lines, the last
+                    // one holding byte 319. Without the loop below, which
+                    // asked again for the three lines above and whose trip
+                    // count (five or six) was a branch to predict.
+                    line(p.wrapping_add(192));
+                    line(p.wrapping_add(256));
+                    line(p.wrapping_add(319));
+                    continue;
+                }
                 (p, packets_for(n) * std::mem::size_of::<super::packet::Tri4>())
             } else {
                 let n = (n & !ENTRY_LEAF) as usize;
