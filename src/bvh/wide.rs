@@ -183,9 +183,8 @@ fn shear<K: TriangleKernel>(ray: &Ray) -> LeafRay {
 /// [`super::slab::RayPre::hit`], with the far scale folded into the
 /// reciprocal; see [`WidePre::inv_far`]).
 #[inline(always)]
-fn box8_scalar(n: &WideNode, p: &WidePre, cull: f32) -> (u32, [f32; WIDTH]) {
+fn box8_scalar(n: &WideNode, p: &WidePre, cull: f32, near: &mut [f32; WIDTH]) -> u32 {
     let mut mask = 0;
-    let mut near = [0.0; WIDTH];
     for (l, near_l) in near.iter_mut().enumerate() {
         let tn_x = (n.b[p.near_row[0]][l] - p.o.x) * p.inv.x;
         let tn_y = (n.b[p.near_row[1]][l] - p.o.y) * p.inv.y;
@@ -198,7 +197,7 @@ fn box8_scalar(n: &WideNode, p: &WidePre, cull: f32) -> (u32, [f32; WIDTH]) {
         *near_l = tn;
         mask |= u32::from(tn <= tf) << l;
     }
-    (mask, near)
+    mask
 }
 
 /// The per-ray registers of the AVX2 box test.
@@ -242,9 +241,9 @@ macro_rules! avx2_pre {
 /// `f32::max`/`f32::min` in [`box8_scalar`].
 #[cfg(target_arch = "x86_64")]
 macro_rules! box8_avx2 {
-    ($n:expr, $q:expr, $cull:expr) => {{
+    ($n:expr, $q:expr, $cull:expr, $near:expr) => {{
         use std::arch::x86_64::*;
-        let (n, q): (&WideNode, &Avx2Pre) = ($n, $q);
+        let (n, q, near): (&WideNode, &Avx2Pre, &mut [f32; WIDTH]) = ($n, $q, $near);
         let base = n.b.as_ptr().cast::<u8>();
         // SAFETY: every offset is a row (32 bytes) of the 64-byte aligned node, so aligned loads are valid.
         let ld = |off: usize| unsafe { _mm256_load_ps(base.add(off).cast::<f32>()) };
@@ -257,17 +256,16 @@ macro_rules! box8_avx2 {
         let tn = _mm256_max_ps(tn_x, _mm256_max_ps(tn_y, _mm256_max_ps(tn_z, q.t_min)));
         let tf = _mm256_min_ps(tf_x, _mm256_min_ps(tf_y, _mm256_min_ps(tf_z, _mm256_set1_ps($cull))));
         let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
-        let mut near = [0.0f32; WIDTH];
         // SAFETY: near has room for 8 floats; storeu has no alignment requirement.
         unsafe { _mm256_storeu_ps(near.as_mut_ptr(), tn) };
-        (mask, near)
+        mask
     }};
 }
 
 /// [`box8_scalar`] in the calling convention of the box-test macros.
 macro_rules! box8_portable {
-    ($n:expr, $q:expr, $cull:expr) => {
-        box8_scalar($n, $q, $cull)
+    ($n:expr, $q:expr, $cull:expr, $near:expr) => {
+        box8_scalar($n, $q, $cull, $near)
     };
 }
 
@@ -305,11 +303,14 @@ macro_rules! closest {
         let mut sp = 0usize;
         let mut cur = Entry { t: r.t_min, child: $start, count: 0 };
         let nodes = &$self.nodes[..];
+        // The entry distances of the node just tested, one buffer for the
+        // whole walk (a fresh array per node was stored, then copied).
+        let mut near = [0.0f32; WIDTH];
         'outer: loop {
             if cur.count == 0 {
                 let node = &nodes[cur.child as usize];
                 $counts.node(cur.child);
-                let (mut mask, near) = $box8!(node, &q, cull);
+                let mut mask = $box8!(node, &q, cull, &mut near);
                 if mask != 0 {
                     if !made && mask & !node.inner_lanes() != 0 {
                         made = true;
@@ -450,10 +451,11 @@ macro_rules! any_hit {
         // -> 0.94 (docs/bvh.md, ninth pass).
         let mut cur = $start;
         let nodes = &$self.nodes[..];
+        let mut near = [0.0f32; WIDTH];
         loop {
             let node = &nodes[cur as usize];
             $counts.node(cur);
-            let (mut mask, near) = $box8!(node, &q, cull);
+            let mut mask = $box8!(node, &q, cull, &mut near);
             if at_root && mask != 0 {
                 at_root = false;
                 lr = shear::<$k>($ray);
