@@ -297,6 +297,61 @@ fn partition_branchless(idx: &mut [PrimRef], side: impl Fn(Vec3A) -> u32) -> usi
     j
 }
 
+/// Nodes with at least this many references are partitioned by
+/// [`partition_chunked`] (on any number of threads, so that the tree does
+/// not depend on the thread count).
+const CHUNKED_PARTITION: usize = 1 << 15;
+
+/// References per chunk of [`partition_chunked`] (a fixed size: the order the
+/// partition leaves, and so the tree, does not depend on the thread count).
+const PARTITION_CHUNK: usize = 1 << 13;
+
+/// [`partition_branchless`] of a large node, its chunks of
+/// [`PARTITION_CHUNK`] references in parallel (rayon): each chunk is
+/// partitioned in place, then the right-side references that lie in the
+/// left side's final range swap places, in order, with the left-side ones
+/// beyond it, in parallel pieces. The two sides hold the same references as
+/// after [`partition_branchless`] (in another order, fixed by the chunk size
+/// alone). Returns the left count.
+fn partition_chunked(idx: &mut [PrimRef], side: impl Fn(Vec3A) -> u32 + Sync) -> usize {
+    use rayon::prelude::*;
+    let lefts: Vec<usize> = idx.par_chunks_mut(PARTITION_CHUNK).map(|c| partition_branchless(c, &side)).collect();
+    let total: usize = lefts.iter().sum();
+    // Chunk `i` holds its left references at `s .. s + l` and its right ones
+    // at `s + l .. e`: those of the right below `total` and those of the
+    // left at or above it are misplaced, equally many.
+    let (mut wrong_right, mut wrong_left) = (Vec::new(), Vec::new());
+    for (i, &l) in lefts.iter().enumerate() {
+        let (s, e) = (i * PARTITION_CHUNK, ((i + 1) * PARTITION_CHUNK).min(idx.len()));
+        if s + l < total.min(e) {
+            wrong_right.push(s + l..total.min(e));
+        }
+        if s.max(total) < s + l {
+            wrong_left.push(s.max(total) - total..s + l - total);
+        }
+    }
+    // Pair them up in order into equal-length pieces, one from each side of
+    // `total` (increasing and disjoint on each side, so carved off in turn).
+    let (mut lo, mut hi) = idx.split_at_mut(total);
+    let (mut lo_at, mut hi_at) = (0, 0);
+    let (mut a, mut b) = (wrong_right.into_iter(), wrong_left.into_iter());
+    let (mut ra, mut rb) = (a.next(), b.next());
+    let mut pieces = Vec::new();
+    while let (Some(x), Some(y)) = (ra.clone(), rb.clone()) {
+        let len = x.len().min(y.len()).min(PARTITION_CHUNK);
+        let (p, rest) = std::mem::take(&mut lo)[x.start - lo_at..].split_at_mut(len);
+        (lo, lo_at) = (rest, x.start + len);
+        let (q, rest) = std::mem::take(&mut hi)[y.start - hi_at..].split_at_mut(len);
+        (hi, hi_at) = (rest, y.start + len);
+        pieces.push((p, q));
+        ra = if len < x.len() { Some(x.start + len..x.end) } else { a.next() };
+        rb = if len < y.len() { Some(y.start + len..y.end) } else { b.next() };
+    }
+    debug_assert!(ra.is_none() && rb.is_none(), "as many misplaced references on each side");
+    pieces.into_par_iter().for_each(|(p, q)| p.swap_with_slice(q));
+    total
+}
+
 impl SahSplit {
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
@@ -325,14 +380,16 @@ impl SahSplit {
         let bins = &mut bins[..nb];
         if n >= PARALLEL_BINNING && rayon::current_num_threads() > 1 {
             // Large nodes (the top of the tree, which no fork shares out) bin
-            // in parallel chunks whose bins are then merged: counts add and
-            // boxes unite exactly, so the bins are those of one sequential pass.
+            // in parallel chunks, two sets of bins each as below, whose bins
+            // are then merged: counts add and boxes unite exactly, so the
+            // bins are those of one sequential pass.
             use rayon::prelude::*;
+            let chunk = (n / (2 * rayon::current_num_threads())).max(PARALLEL_BINNING / 4);
             let merged = idx
-                .par_chunks(PARALLEL_BINNING / 4)
-                .map(|chunk| {
-                    let mut b = vec![Bin::EMPTY; nb];
-                    bin_into(chunk, &mut b, cb.min, scale, lastf);
+                .par_chunks(chunk)
+                .map(|c| {
+                    let (mut b, mut b2) = (vec![Bin::EMPTY; nb], vec![Bin::EMPTY; nb]);
+                    bin_into2(c, &mut b, &mut b2, cb.min, scale, lastf);
                     b
                 })
                 .reduce_with(|mut b0, b1| {
@@ -418,7 +475,7 @@ impl SahSplit {
         // arithmetic on all three lanes and read at `axis`.
         let limit = Vec3A::splat((s + 1) as f32);
         let side = |c: Vec3A| ((c - cb.min) * scale).cmplt(limit).bitmask() >> axis & 1;
-        let i = partition_branchless(idx, side);
+        let i = if n >= CHUNKED_PARTITION { partition_chunked(idx, side) } else { partition_branchless(idx, side) };
         debug_assert_eq!(i, nl);
         // The children's centroid boxes are left to the children (one
         // read-only pass each, `centroid_bounds_of`, and none for a child of
@@ -430,4 +487,51 @@ impl SahSplit {
 /// Build with the binned SAH.
 pub fn build(prims: &Primitives, bins: usize) -> BinaryBvh {
     build_with(prims, &SahSplit { bins, block: crate::bvh::packet::leaf_block(prims.len()) }, Builder::Sah)
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3A;
+
+    use super::*;
+    use crate::rng::Pcg32;
+
+    /// The chunked partition puts the same references on each side as the
+    /// sequential one, whatever the sizes (a part chunk at the end, one
+    /// side empty, sides of every balance), and the same order on one
+    /// thread as on two.
+    #[test]
+    fn chunked_partition_keeps_the_sides_of_the_sequential_one() {
+        let mut rng = Pcg32::new(7, 1);
+        let sizes = [1, PARTITION_CHUNK - 1, PARTITION_CHUNK, 3 * PARTITION_CHUNK + 17, 11 * PARTITION_CHUNK + 5];
+        for &n in &sizes {
+            for share in [0.0, 0.01, 0.3, 0.5, 0.9, 1.0] {
+                let refs: Vec<PrimRef> = (0..n as u32)
+                    .map(|id| {
+                        let c = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+                        PrimRef::new(id, BoxA { min: c, max: c })
+                    })
+                    .collect();
+                let side = |c: Vec3A| u32::from(c.x < share);
+                let mut seq = refs.clone();
+                let ns = partition_branchless(&mut seq, side);
+                let mut orders = Vec::new();
+                for threads in [1, 2] {
+                    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                    let mut ch = refs.clone();
+                    let nc = pool.install(|| partition_chunked(&mut ch, side));
+                    assert_eq!(nc, ns, "n {n}, share {share}: left count");
+                    let ids = |r: &[PrimRef]| {
+                        let mut v: Vec<u32> = r.iter().map(PrimRef::id).collect();
+                        v.sort_unstable();
+                        v
+                    };
+                    assert_eq!(ids(&ch[..nc]), ids(&seq[..ns]), "n {n}, share {share}: left side");
+                    assert_eq!(ids(&ch[nc..]), ids(&seq[ns..]), "n {n}, share {share}: right side");
+                    orders.push(ch.iter().map(PrimRef::id).collect::<Vec<_>>());
+                }
+                assert_eq!(orders[0], orders[1], "n {n}, share {share}: order depends on the thread count");
+            }
+        }
+    }
 }
