@@ -8,7 +8,8 @@
 //! no split beats its leaf cost `C_isect * B(N)` and it holds at most
 //! [`SAH_MAX_LEAF`] primitives. The bins of a node are held bin-major with the
 //! three axes side by side, so the sweep evaluates the three axes at once.
-//! Large nodes build their subtrees in parallel (rayon).
+//! Large nodes bin and partition their references in parallel chunks, and
+//! build their subtrees in parallel (rayon).
 
 use glam::{UVec4, Vec3A};
 
