@@ -16,6 +16,7 @@ use glam::Vec3;
 use rtdiff::accel::{BruteForce, Tracer};
 use rtdiff::backends::{AccelConfig, build_tracer, native_variants};
 use rtdiff::bvh::BvhTracer;
+use rtdiff::bvh::WalkIsa;
 use rtdiff::camera::Camera;
 use rtdiff::geometry::offset::SpawnOffset;
 use rtdiff::geometry::{Hit, Primitives, Ray, Sphere, TriangleTest};
@@ -90,9 +91,11 @@ fn check_scene(label: &str, prims: Primitives) {
             let cfg = AccelConfig { triangle_test: test, ..cfg };
             check_batches(label, build_tracer(prims.clone(), &cfg).unwrap().as_ref(), &rays, &truth);
         }
-        let mut scalar = BvhTracer::new(&prims, &AccelConfig { triangle_test: test, ..Default::default() });
-        scalar.force_scalar();
-        check_batches(&format!("{label} (portable)"), &scalar, &rays, &truth);
+        for &isa in &WalkIsa::supported()[1..] {
+            let mut narrower = BvhTracer::new(&prims, &AccelConfig { triangle_test: test, ..Default::default() });
+            assert!(narrower.force_isa(isa));
+            check_batches(&format!("{label} ({} walks)", isa.name()), &narrower, &rays, &truth);
+        }
     }
 }
 

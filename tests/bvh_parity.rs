@@ -11,6 +11,7 @@ use rayon::prelude::*;
 use rtdiff::accel::{BruteForce, Tracer};
 use rtdiff::backends::{AccelConfig, Traversal, build_tracer, native_variants};
 use rtdiff::bvh::BvhTracer;
+use rtdiff::bvh::WalkIsa;
 use rtdiff::geometry::{Hit, Primitives, TriangleTest};
 use rtdiff::rays::mixed_rays;
 
@@ -81,10 +82,13 @@ fn check_scene(label: &str, prims: Primitives, seed: u64) {
             let tracer = build_tracer(prims.clone(), &cfg).unwrap();
             check_tracer(label, tracer.as_ref(), rays, &truth);
         }
-        // The portable box test of the fast path must agree too (it is the only one on CPUs without AVX2).
-        let mut scalar = BvhTracer::new(&prims, &AccelConfig { triangle_test: test, ..Default::default() });
-        scalar.force_scalar();
-        check_tracer(&format!("{label} (scalar box test)"), &scalar, rays, &truth);
+        // The fast path's walks compiled for every narrower instruction set this CPU runs must agree
+        // too (the portable one is the only one on CPUs without AVX2; AVX2 the widest without AVX-512).
+        for &isa in &WalkIsa::supported()[1..] {
+            let mut narrower = BvhTracer::new(&prims, &AccelConfig { triangle_test: test, ..Default::default() });
+            assert!(narrower.force_isa(isa));
+            check_tracer(&format!("{label} ({} walks)", isa.name()), &narrower, rays, &truth);
+        }
         println!("{label} {test:?}: {hits} of {} rays hit; all variants identical to brute force", rays.len());
     }
 }

@@ -38,7 +38,7 @@ pub use count::{Count, TraversalCounts, VisitLog};
 pub use node::Node;
 pub use prims::LeafPrims;
 pub use stats::BvhStats;
-pub use wide::WideBvh;
+pub use wide::{WalkIsa, WideBvh};
 
 pub use config::{BinaryOrder, Builder, BvhConfig, NodeLayout, Traversal};
 
@@ -110,10 +110,21 @@ impl BvhTracer {
 
     /// Use the portable scalar code in the 8-wide traversal even when AVX2 is available.
     pub fn force_scalar(&mut self) {
-        if let Tree::Wide(w, k) = &mut self.tree {
-            w.set_scalar();
+        self.force_isa(WalkIsa::Portable);
+    }
+
+    /// Run the 8-wide traversal's walks compiled for `isa` (tests and
+    /// measurements; the widest set the CPU runs is the default). Returns
+    /// false, changing nothing, when the CPU does not run `isa` or the tree
+    /// is not 8-wide.
+    pub fn force_isa(&mut self, isa: WalkIsa) -> bool {
+        if let Tree::Wide(w, k) = &mut self.tree
+            && w.set_isa(isa)
+        {
             *k = w.kernels(self.cfg.triangle_test);
+            return true;
         }
+        false
     }
 
     /// The binary tree walked by the reports' traversals (None for the 8-wide layout).

@@ -205,8 +205,14 @@ fn box8_scalar(n: &WideNode, p: &WidePre, cull: f32, near: &mut [f32; WIDTH]) ->
 #[derive(Clone, Copy)]
 struct Avx2Pre {
     o: [std::arch::x86_64::__m256; 3],
-    inv: [std::arch::x86_64::__m256; 3],
-    inv_far: [std::arch::x86_64::__m256; 3],
+    /// `-inv` and `-inv_far` ([`WidePre`]): the box test computes
+    /// `(o - b) * -inv`, the same bits as `(b - o) * inv` (rounding to
+    /// nearest is symmetric: `fl(o - b) = -fl(b - o)`) but for the sign of
+    /// a zero, which orders nothing (`-0 == 0`) and reaches no answer, with
+    /// the node's row as the subtraction's memory operand instead of a load
+    /// of its own: six instructions fewer per node.
+    neg_inv: [std::arch::x86_64::__m256; 3],
+    neg_inv_far: [std::arch::x86_64::__m256; 3],
     t_min: std::arch::x86_64::__m256,
     /// Byte offsets of the near and far rows of each axis in a node.
     near: [usize; 3],
@@ -224,8 +230,8 @@ macro_rules! avx2_pre {
         let row = std::mem::size_of::<[f32; WIDTH]>();
         Avx2Pre {
             o: b(p.o),
-            inv: b(p.inv),
-            inv_far: b(p.inv_far),
+            neg_inv: b(-p.inv),
+            neg_inv_far: b(-p.inv_far),
             t_min: _mm256_set1_ps(p.t_min),
             near: p.near_row.map(|r| r * row),
             far: p.far_row.map(|r| r * row),
@@ -247,12 +253,12 @@ macro_rules! box8_avx2 {
         let base = n.b.as_ptr().cast::<u8>();
         // SAFETY: every offset is a row (32 bytes) of the 64-byte aligned node, so aligned loads are valid.
         let ld = |off: usize| unsafe { _mm256_load_ps(base.add(off).cast::<f32>()) };
-        let tn_x = _mm256_mul_ps(_mm256_sub_ps(ld(q.near[0]), q.o[0]), q.inv[0]);
-        let tn_y = _mm256_mul_ps(_mm256_sub_ps(ld(q.near[1]), q.o[1]), q.inv[1]);
-        let tn_z = _mm256_mul_ps(_mm256_sub_ps(ld(q.near[2]), q.o[2]), q.inv[2]);
-        let tf_x = _mm256_mul_ps(_mm256_sub_ps(ld(q.far[0]), q.o[0]), q.inv_far[0]);
-        let tf_y = _mm256_mul_ps(_mm256_sub_ps(ld(q.far[1]), q.o[1]), q.inv_far[1]);
-        let tf_z = _mm256_mul_ps(_mm256_sub_ps(ld(q.far[2]), q.o[2]), q.inv_far[2]);
+        let tn_x = _mm256_mul_ps(_mm256_sub_ps(q.o[0], ld(q.near[0])), q.neg_inv[0]);
+        let tn_y = _mm256_mul_ps(_mm256_sub_ps(q.o[1], ld(q.near[1])), q.neg_inv[1]);
+        let tn_z = _mm256_mul_ps(_mm256_sub_ps(q.o[2], ld(q.near[2])), q.neg_inv[2]);
+        let tf_x = _mm256_mul_ps(_mm256_sub_ps(q.o[0], ld(q.far[0])), q.neg_inv_far[0]);
+        let tf_y = _mm256_mul_ps(_mm256_sub_ps(q.o[1], ld(q.far[1])), q.neg_inv_far[1]);
+        let tf_z = _mm256_mul_ps(_mm256_sub_ps(q.o[2], ld(q.far[2])), q.neg_inv_far[2]);
         let tn = _mm256_max_ps(tn_x, _mm256_max_ps(tn_y, _mm256_max_ps(tn_z, q.t_min)));
         let tf = _mm256_min_ps(tf_x, _mm256_min_ps(tf_y, _mm256_min_ps(tf_z, _mm256_set1_ps($cull))));
         let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
@@ -557,7 +563,8 @@ impl Kernels {
     /// Closest hit of `ray` in `bvh`, which must be the tree these kernels were chosen for.
     #[inline(always)]
     pub fn closest(&self, bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
-        // SAFETY: `WideBvh::kernels` only hands out AVX2 entry points when the CPU has AVX2.
+        // SAFETY: `WideBvh::kernels` only hands out AVX2 (AVX-512) entry points when the CPU has AVX2
+        // (AVX2, AVX-512F and AVX-512VL).
         unsafe { (self.closest)(bvh, ray) }
     }
 
@@ -609,13 +616,75 @@ impl Kernels {
     }
 }
 
-/// Which box test and leaf code a traversal runs.
+/// Which instruction set the walks are compiled for ([`WideBvh::isa`]).
+///
+/// Every set gives the same answers bit for bit: the walks are the same
+/// source, and Rust neither contracts nor reassociates floating-point
+/// operations under any target feature.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Isa {
-    /// AVX2 boxes, SSE packets.
+pub enum WalkIsa {
+    /// The AVX2 walks, except the single-ray closest-hit walk, which is the
+    /// same code compiled for AVX-512F and AVX-512VL: 256-bit vectors still,
+    /// but 32 vector registers, mask registers and broadcasts folded into
+    /// arithmetic. On Zen 4 (`rtdiff bench --race 9 --threads 1`, the AVX2
+    /// and AVX-512 binaries alternated, three pairs, against Embree's
+    /// default MEDIUM) suzanne's incoherent rays 0.967-0.969 -> 0.980-0.987,
+    /// camera rays 1.144-1.154 -> 1.139-1.187, dragon_87k camera rays
+    /// 1.033-1.056 -> 1.060-1.072. The any-hit and packet walks stay AVX2:
+    /// compiled so too, dragon_87k's shadow rays lost 3-4% (1.132-1.155 ->
+    /// 1.081-1.115).
+    Avx512,
+    /// AVX2 boxes, SSE or AVX2 packet tests.
     Avx2,
     /// Portable scalar code.
     Portable,
+}
+
+impl WalkIsa {
+    /// The set's name in reports: `avx512`, `avx2` or `portable`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Avx512 => "avx512",
+            Self::Avx2 => "avx2",
+            Self::Portable => "portable",
+        }
+    }
+
+    /// What runs under this set, for reports: `avx512 closest-hit walk, avx2
+    /// elsewhere`, `avx2` or `portable`.
+    pub fn summary(self) -> &'static str {
+        match self {
+            Self::Avx512 => "avx512 closest-hit walk, avx2 elsewhere",
+            other => other.name(),
+        }
+    }
+
+    /// Whether this CPU runs the set's walks.
+    pub fn is_supported(self) -> bool {
+        match self {
+            #[cfg(target_arch = "x86_64")]
+            Self::Avx512 => {
+                std::arch::is_x86_feature_detected!("avx2")
+                    && std::arch::is_x86_feature_detected!("avx512f")
+                    && std::arch::is_x86_feature_detected!("avx512vl")
+            }
+            #[cfg(target_arch = "x86_64")]
+            Self::Avx2 => std::arch::is_x86_feature_detected!("avx2"),
+            #[cfg(not(target_arch = "x86_64"))]
+            Self::Avx512 | Self::Avx2 => false,
+            Self::Portable => true,
+        }
+    }
+
+    /// The sets this CPU runs, widest first (the first is the default).
+    pub fn supported() -> Vec<Self> {
+        [Self::Avx512, Self::Avx2, Self::Portable].into_iter().filter(|i| i.is_supported()).collect()
+    }
+
+    /// Whether the AVX2 walks run (both SIMD sets).
+    fn simd(self) -> bool {
+        self != Self::Portable
+    }
 }
 
 /// A wide BVH sharing the reordered primitives of the binary BVH it came from.
@@ -627,7 +696,7 @@ pub struct WideBvh {
     pub prims: LeafPrims,
     /// The triangles of every other leaf in 4-wide packets (None when there are no triangles).
     pub packets: Option<TriPackets>,
-    isa: Isa,
+    isa: WalkIsa,
     /// Wide nodes on the longest root-to-leaf path (sizes the traversal stack).
     levels: usize,
     /// The tree outgrows a core's L2 cache ([`PREFETCH_ALL_BYTES`]): every
@@ -762,12 +831,30 @@ impl WideBvh {
 
     /// Force the portable scalar code (for testing it on AVX2 machines).
     pub fn set_scalar(&mut self) {
-        self.isa = Isa::Portable;
+        self.isa = WalkIsa::Portable;
     }
 
-    /// True when the AVX2 path is used (AVX2 and FMA boxes, SSE packets).
+    /// Run the walks compiled for `isa` (the widest set this CPU runs is the
+    /// default; a narrower one is for tests and measurements). Returns false,
+    /// changing nothing, when this CPU does not run `isa`. Kernels chosen by
+    /// [`Self::kernels`] before keep their set.
+    pub fn set_isa(&mut self, isa: WalkIsa) -> bool {
+        let ok = isa.is_supported();
+        if ok {
+            self.isa = isa;
+        }
+        ok
+    }
+
+    /// The instruction set the walks run ([`WalkIsa`]).
+    pub fn isa(&self) -> WalkIsa {
+        self.isa
+    }
+
+    /// True when the AVX2 walks run (AVX2 boxes, SSE or AVX2 packet tests):
+    /// [`WalkIsa::Avx2`] or [`WalkIsa::Avx512`].
     pub fn uses_avx2(&self) -> bool {
-        self.isa == Isa::Avx2
+        self.isa.simd()
     }
 
     /// Memory the nodes and primitives take, in bytes (the arrays' lengths:
@@ -790,22 +877,25 @@ impl WideBvh {
     fn kernels_for<K: TriangleKernel>(&self) -> Kernels {
         let shallow = self.levels * (WIDTH - 1) <= SHALLOW_STACK;
         #[cfg(target_arch = "x86_64")]
-        if self.isa == Isa::Avx2 {
-            /// The AVX2 entry points with stack size `S` and the prefetch choice `P`.
-            fn avx2<K: TriangleKernel, const S: usize, const P: bool>() -> Kernels {
+        if self.isa.simd() {
+            /// The SIMD entry points with stack size `S` and the prefetch
+            /// choice `P`: AVX2, but the single-ray closest hit's compiled
+            /// for AVX-512 when `wide` ([`WalkIsa::Avx512`]).
+            fn simd<K: TriangleKernel, const S: usize, const P: bool>(wide: bool) -> Kernels {
                 use super::wide_packet::{any8, closest8};
                 Kernels {
-                    closest: closest_avx2::<K, S, P>,
+                    closest: if wide { closest_avx512::<K, S, P> } else { closest_avx2::<K, S, P> },
                     any: any_avx2::<K, S, P>,
                     closest8: closest8::<K, S, P>,
                     any8: any8::<K, S, P>,
                 }
             }
+            let wide = self.isa == WalkIsa::Avx512;
             return match (shallow, self.prefetch_all) {
-                (true, false) => avx2::<K, SHALLOW_STACK, false>(),
-                (true, true) => avx2::<K, SHALLOW_STACK, true>(),
-                (false, false) => avx2::<K, STACK, false>(),
-                (false, true) => avx2::<K, STACK, true>(),
+                (true, false) => simd::<K, SHALLOW_STACK, false>(wide),
+                (true, true) => simd::<K, SHALLOW_STACK, true>(wide),
+                (false, false) => simd::<K, STACK, false>(wide),
+                (false, true) => simd::<K, STACK, true>(wide),
             };
         }
         let (closest, any): (ClosestFn, AnyFn) = if shallow {
@@ -839,7 +929,18 @@ impl WideBvh {
             return None;
         }
         #[cfg(target_arch = "x86_64")]
-        if self.isa == Isa::Avx2 {
+        if self.isa == WalkIsa::Avx512 {
+            // SAFETY: isa is Avx512 only when the CPU reports AVX2, AVX-512F and AVX-512VL.
+            return unsafe {
+                if self.prefetch_all {
+                    self.closest_avx512_impl::<K, C, STACK, true>(ray, counts)
+                } else {
+                    self.closest_avx512_impl::<K, C, STACK, false>(ray, counts)
+                }
+            };
+        }
+        #[cfg(target_arch = "x86_64")]
+        if self.isa == WalkIsa::Avx2 {
             // SAFETY: isa is Avx2 only when the CPU reports AVX2.
             return unsafe {
                 if self.prefetch_all {
@@ -874,8 +975,8 @@ impl WideBvh {
             return false;
         }
         #[cfg(target_arch = "x86_64")]
-        if self.isa == Isa::Avx2 {
-            // SAFETY: isa is Avx2 only when the CPU reports AVX2.
+        if self.isa.simd() {
+            // SAFETY: isa is Avx2 or Avx512 only when the CPU reports AVX2.
             return unsafe {
                 if self.prefetch_all {
                     self.any_avx2_impl::<K, C, STACK, true>(ray, counts)
@@ -1040,6 +1141,18 @@ impl WideBvh {
         self.prims.finish(closest!(self, ray, 0, K, avx2_pre, box8_avx2, true, counts, S, P), ray)
     }
 
+    /// [`Self::closest_avx2_impl`] compiled for AVX-512F and AVX-512VL
+    /// ([`WalkIsa::Avx512`]): the same source, so the same answers bit for bit.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,avx512f,avx512vl")]
+    fn closest_avx512_impl<K: TriangleKernel, C: Count, const S: usize, const P: bool>(
+        &self,
+        ray: &Ray,
+        counts: &mut C,
+    ) -> Option<Hit> {
+        self.prims.finish(closest!(self, ray, 0, K, avx2_pre, box8_avx2, true, counts, S, P), ray)
+    }
+
     /// The AVX2 closest-hit walk of the subtree under node `start` alone,
     /// before [`LeafPrims::finish`] (the packet walk's switch to single rays
     /// when few of its rays are left).
@@ -1100,6 +1213,17 @@ unsafe fn closest_avx2<K: TriangleKernel, const S: usize, const P: bool>(bvh: &W
     }
     // SAFETY: the caller guarantees AVX2 (`WideBvh::kernels`).
     unsafe { bvh.closest_avx2_impl::<K, (), S, P>(ray, &mut ()) }
+}
+
+/// The AVX-512 closest-hit entry point (only called when the CPU has AVX2,
+/// AVX-512F and AVX-512VL).
+#[cfg(target_arch = "x86_64")]
+unsafe fn closest_avx512<K: TriangleKernel, const S: usize, const P: bool>(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
+    if bvh.nodes.is_empty() {
+        return None;
+    }
+    // SAFETY: the caller guarantees AVX2, AVX-512F and AVX-512VL (`WideBvh::kernels`).
+    unsafe { bvh.closest_avx512_impl::<K, (), S, P>(ray, &mut ()) }
 }
 
 /// The AVX2 any-hit entry point (only called when the CPU has AVX2).
@@ -1231,12 +1355,9 @@ fn levels(nodes: &[WideNode]) -> usize {
     deepest
 }
 
-fn detect_isa() -> Isa {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        return Isa::Avx2;
-    }
-    Isa::Portable
+/// The widest set this CPU runs.
+fn detect_isa() -> WalkIsa {
+    WalkIsa::supported()[0]
 }
 
 #[cfg(test)]
@@ -1329,17 +1450,22 @@ mod tests {
             Ray::new(eye, Vec3::new(x, y, 0.5) - eye)
         }));
         let bits = |h: Option<Hit>| h.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()));
-        for test in [TriangleTest::Watertight, TriangleTest::MollerTrumbore] {
+        for (test, isa) in [TriangleTest::Watertight, TriangleTest::MollerTrumbore]
+            .into_iter()
+            .flat_map(|t| WalkIsa::supported().into_iter().map(move |i| (t, i)))
+        {
             let brute = crate::accel::brute::BruteForce::new(prims.clone(), test);
+            let mut w = w.clone();
+            assert!(w.set_isa(isa));
             let k = w.kernels(test);
             let (closest, any) = batch_answers(&w, &k, &rays);
             let mut hits = 0;
             for (i, r) in rays.iter().enumerate() {
                 let want = crate::accel::Tracer::intersect(&brute, r);
-                assert_eq!(bits(k.closest(&w, r)), bits(want), "{test:?} ray {i}");
-                assert_eq!(bits(closest[i]), bits(want), "{test:?} ray {i} in a packet");
-                assert_eq!(k.any(&w, r), want.is_some(), "{test:?} ray {i}");
-                assert_eq!(any[i], want.is_some(), "{test:?} ray {i} in a packet");
+                assert_eq!(bits(k.closest(&w, r)), bits(want), "{test:?} {isa:?} ray {i}");
+                assert_eq!(bits(closest[i]), bits(want), "{test:?} {isa:?} ray {i} in a packet");
+                assert_eq!(k.any(&w, r), want.is_some(), "{test:?} {isa:?} ray {i}");
+                assert_eq!(any[i], want.is_some(), "{test:?} {isa:?} ray {i} in a packet");
                 hits += usize::from(want.is_some());
             }
             assert!(hits > 1500, "only {hits} hits");
@@ -1363,11 +1489,9 @@ mod tests {
         }
         rays[5].t_min = 2.0;
         rays[5].t_max = 1.0;
-        for &scalar in &[false, true] {
+        for isa in WalkIsa::supported() {
             let mut w = super::super::build_wide(&prims, &AccelConfig::default());
-            if scalar {
-                w.set_scalar();
-            }
+            assert!(w.set_isa(isa));
             let k = w.kernels(TriangleTest::Watertight);
             let (closest, any) = batch_answers(&w, &k, &rays);
             let mut hits = 0;
@@ -1376,9 +1500,9 @@ mod tests {
                 assert_eq!(
                     closest[i].map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits())),
                     one.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits())),
-                    "ray {i}"
+                    "{isa:?} ray {i}"
                 );
-                assert_eq!(any[i], one.is_some(), "ray {i}");
+                assert_eq!(any[i], one.is_some(), "{isa:?} ray {i}");
                 hits += usize::from(one.is_some());
             }
             assert!(hits > 2000, "only {hits} hits");

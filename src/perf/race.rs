@@ -114,8 +114,8 @@ pub struct MeshRace {
     /// What each Embree mode's scene holds per primitive (its memory monitor;
     /// the builds of the first thread count raced), beside rtdiff's tree.
     pub embree_memory: Vec<EmbreeMemory>,
-    /// The instruction set of rtdiff's traversal: `avx2` (AVX2 and FMA,
-    /// [`crate::bvh::WideBvh::uses_avx2`]) or `portable`.
+    /// The instruction sets of rtdiff's traversal
+    /// ([`crate::bvh::WalkIsa::summary`]).
     pub rtdiff_isa: String,
     /// The instruction set of the kernels Embree ran ([`EmbreeIsa::running`]).
     pub embree_isa: EmbreeIsa,
@@ -353,7 +353,7 @@ pub fn race_mesh(
         rtdiff = ours.name();
         if let Some(w) = pool.install(|| crate::bvh::BvhTracer::new(prims, &cfg)).wide() {
             bytes = w.bytes() as f64 / prims.len().max(1) as f64;
-            isa = if w.uses_avx2() { "avx2" } else { "portable" };
+            isa = w.isa().summary();
         }
         let theirs: Vec<EmbreeTracer> = EMBREE_MODES
             .iter()
