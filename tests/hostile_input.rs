@@ -377,6 +377,12 @@ fn count_flags_have_limits_named_in_errors_and_help() {
     let (code, err) = rtdiff_cmd(&["bench", s, "--embree-max-isa", "avx2"]);
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("--embree-max-isa applies to --race only"), "{err}");
+    let (code, err) = rtdiff_cmd(&["bench", s, "--rtdiff-isa", "avx2"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("--rtdiff-isa applies to --race only"), "{err}");
+    let (code, err) = rtdiff_cmd(&["bench", s, "--race", "1", "--rtdiff-isa", "sse9"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("'sse9'") && err.contains("avx512, avx2, portable"), "{err}");
     let (code, err) = rtdiff_cmd(&["bench", s, "--race", "1", "--embree-max-isa", "avx3"]);
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("\"avx3\"") && err.contains("sse2, sse42, avx, avx2, avx512"), "{err}");

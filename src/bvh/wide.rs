@@ -621,7 +621,8 @@ impl Kernels {
 /// Every set gives the same answers bit for bit: the walks are the same
 /// source, and Rust neither contracts nor reassociates floating-point
 /// operations under any target feature.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
 pub enum WalkIsa {
     /// The AVX2 walks, except the single-ray closest-hit walk, which is the
     /// same code compiled for AVX-512F and AVX-512VL: 256-bit vectors still,

@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 use crate::backends::{Builder, Traversal};
+use crate::bvh::WalkIsa;
 use crate::cli::render::parse_triangle_test;
 use crate::error::{Error, Result};
 use crate::geometry::TriangleTest;
@@ -72,10 +73,15 @@ pub struct BenchArgs {
     /// With `--race`: the widest instruction set Embree's kernels may use
     /// (`sse2`, `sse42`, `avx`, `avx2`, `avx512`; Embree's `max_isa`). By
     /// default Embree runs the widest this CPU has, AVX-512 on CPUs that
-    /// have it, while rtdiff's walks are AVX2: `avx2` races both on the same
-    /// instruction set, as on a CPU without AVX-512.
+    /// have it (as rtdiff's closest-hit walk does); with `--rtdiff-isa avx2`,
+    /// `avx2` races both on the same instruction set, as on a CPU without
+    /// AVX-512.
     #[arg(long, value_name = "ISA", value_parser = parse_embree_isa)]
     pub embree_max_isa: Option<EmbreeIsa>,
+    /// With `--race`: the instruction set of rtdiff's walks (`avx512`,
+    /// `avx2`, `portable`; by default the widest this CPU runs).
+    #[arg(long, value_name = "ISA", value_enum)]
+    pub rtdiff_isa: Option<WalkIsa>,
     /// Also write the race's typed report as JSON to this file.
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
@@ -114,6 +120,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     if args.embree_max_isa.is_some() {
         return Err(Error::Invalid("--embree-max-isa applies to --race only".into()));
+    }
+    if args.rtdiff_isa.is_some() {
+        return Err(Error::Invalid("--rtdiff-isa applies to --race only".into()));
     }
     let scenes =
         if args.scenes.is_empty() { default_meshes(&["dragon_87k", "dragon_full"]) } else { args.scenes.clone() };
@@ -157,6 +166,7 @@ fn race(args: &BenchArgs, rounds: usize) -> Result<()> {
             batches: true,
             triangle_test: args.triangle_test,
             embree_max_isa: args.embree_max_isa,
+            rtdiff_isa: args.rtdiff_isa,
         };
         for s in &files {
             let prims = crate::rays::load_primitives(s, true)?;
@@ -256,8 +266,9 @@ pub fn print_mesh_race(m: &MeshRace, rounds: usize) {
         m.mesh, m.primitives, m.rtdiff_bytes_per_primitive, m.rtdiff
     );
     println!(
-        "instruction sets: rtdiff {}, Embree {}{}",
+        "instruction sets: rtdiff {}{}, Embree {}{}",
         m.rtdiff_isa,
+        if m.rtdiff_isa_set { " (set by --rtdiff-isa)" } else { "" },
         m.embree_isa.name(),
         if m.embree_capped { " (capped by --embree-max-isa)" } else { " (the widest this CPU runs)" }
     );

@@ -117,6 +117,8 @@ pub struct MeshRace {
     /// The instruction sets of rtdiff's traversal
     /// ([`crate::bvh::WalkIsa::summary`]).
     pub rtdiff_isa: String,
+    /// Whether rtdiff's walks were set by [`RaceOptions::rtdiff_isa`] (not the widest this CPU runs).
+    pub rtdiff_isa_set: bool,
     /// The instruction set of the kernels Embree ran ([`EmbreeIsa::running`]).
     pub embree_isa: EmbreeIsa,
     /// Whether Embree was capped below the widest set this CPU runs (`--embree-max-isa`).
@@ -179,6 +181,9 @@ pub struct RaceOptions {
     /// The widest instruction set Embree's kernels may use (its device's
     /// `max_isa`); `None`: the widest this CPU runs.
     pub embree_max_isa: Option<EmbreeIsa>,
+    /// The instruction set of rtdiff's walks ([`crate::bvh::WideBvh::set_isa`]);
+    /// `None`: the widest this CPU runs, as users get them.
+    pub rtdiff_isa: Option<crate::bvh::WalkIsa>,
 }
 
 /// An instruction set Embree's x86 kernels are built for.
@@ -322,6 +327,23 @@ pub fn race_mesh(
         return Err(crate::Error::Invalid("--race needs at least one round".into()));
     }
     let cfg = AccelConfig { triangle_test: opts.triangle_test, ..AccelConfig::default() };
+    if let Some(isa) = opts.rtdiff_isa
+        && !isa.is_supported()
+    {
+        return Err(crate::Error::Invalid(format!("this CPU does not run rtdiff's {} walks", isa.name())));
+    }
+    // rtdiff's tracer as users build it (`build_tracer`), its walks then
+    // switched to the instruction set asked for, if any.
+    let build_ours = |prims: Arc<Primitives>| -> Result<Box<dyn crate::accel::Tracer>> {
+        match opts.rtdiff_isa {
+            None => build_tracer(prims, &cfg),
+            Some(isa) => {
+                let mut t = crate::bvh::BvhTracer::new(&prims, &cfg);
+                t.force_isa(isa);
+                Ok(Box::new(t))
+            }
+        }
+    };
     let loads = workloads(sets, opts.batches);
     let mut contests = Vec::new();
     let mut hit_count_differences = Vec::new();
@@ -349,9 +371,13 @@ pub fn race_mesh(
                 (clock.since(s), r)
             }
         };
-        let ours = pool.install(|| build_tracer(prims.clone(), &cfg))?;
+        let ours = pool.install(|| build_ours(prims.clone()))?;
         rtdiff = ours.name();
-        if let Some(w) = pool.install(|| crate::bvh::BvhTracer::new(prims, &cfg)).wide() {
+        let mut probe = pool.install(|| crate::bvh::BvhTracer::new(prims, &cfg));
+        if let Some(isa) = opts.rtdiff_isa {
+            probe.force_isa(isa);
+        }
+        if let Some(w) = probe.wide() {
             bytes = w.bytes() as f64 / prims.len().max(1) as f64;
             isa = w.isa().summary();
         }
@@ -407,7 +433,7 @@ pub fn race_mesh(
             for k in run_order(m + 1, round, 0) {
                 if k == m {
                     let (t, w, r) = pool.install(|| {
-                        let mut b = || build_tracer(prims.clone(), &cfg).map(|_| 0);
+                        let mut b = || build_ours(prims.clone()).map(|_| 0);
                         time_result(threads, &clock, &mut b)
                     });
                     r?;
@@ -463,6 +489,7 @@ pub fn race_mesh(
         rtdiff_bytes_per_primitive: bytes,
         embree_memory,
         rtdiff_isa: isa.to_string(),
+        rtdiff_isa_set: opts.rtdiff_isa.is_some(),
         embree_isa: EmbreeIsa::running(opts.embree_max_isa),
         embree_capped: opts.embree_max_isa.is_some_and(|m| m < EmbreeIsa::widest_on_this_cpu()),
         contests,

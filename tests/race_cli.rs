@@ -1,0 +1,44 @@
+//! `rtdiff bench --race` runs rtdiff's walks on the instruction set asked for
+//! (`--rtdiff-isa`) and reports the set it ran, in the text and in the JSON.
+#![cfg(feature = "embree")]
+
+use std::process::Command;
+
+use rtdiff::bvh::WalkIsa;
+
+/// Race one round on a two-triangle mesh; returns stdout and the JSON report.
+fn race(dir: &std::path::Path, extra: &[&str]) -> (String, serde_json::Value) {
+    let mesh = dir.join("quad.obj");
+    std::fs::write(&mesh, "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3\nf 1 3 4\n").unwrap();
+    let json = dir.join("race.json");
+    let mut args = vec!["bench", "--race", "1", "--threads", "1", "--json", json.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    args.push(mesh.to_str().unwrap());
+    let out = Command::new(env!("CARGO_BIN_EXE_rtdiff")).args(&args).output().expect("runs");
+    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "{args:?}: {stderr}");
+    let report = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    (stdout.into_owned(), report)
+}
+
+#[test]
+fn the_race_runs_and_reports_the_walks_instruction_set() {
+    let dir = std::env::temp_dir().join(format!("rtdiff-race-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let widest = WalkIsa::supported()[0];
+    for (extra, isa, note) in
+        [(vec![], widest, ""), (vec!["--rtdiff-isa", "portable"], WalkIsa::Portable, " (set by --rtdiff-isa)")]
+    {
+        let (text, report) = race(&dir, &extra);
+        let line = format!("instruction sets: rtdiff {}{note}, Embree", isa.summary());
+        assert!(text.contains(&line), "{extra:?}: no `{line}` in\n{text}");
+        let mesh = &report["meshes"][0];
+        assert_eq!(mesh["rtdiff_isa"], isa.summary(), "{extra:?}");
+        assert_eq!(mesh["rtdiff_isa_set"], !extra.is_empty(), "{extra:?}");
+        // Every contest ran, once (one round).
+        let contests = mesh["contests"].as_array().unwrap();
+        assert!(contests.iter().any(|c| c["name"] == "incoherent"), "{extra:?}");
+        assert!(contests.iter().all(|c| c["times"].as_array().unwrap().len() == 1), "{extra:?}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
