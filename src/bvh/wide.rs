@@ -435,6 +435,24 @@ macro_rules! closest {
     }};
 }
 
+/// The SIMD closest-hit walk from the root as method `$name` of [`WideBvh`],
+/// compiled for the target features `$features` (one definition for every
+/// instruction set the walk is compiled for, [`WalkIsa`]).
+macro_rules! simd_closest_walk {
+    ($(#[$doc:meta])* $name:ident, $features:literal) => {
+        $(#[$doc])*
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = $features)]
+        fn $name<K: TriangleKernel, C: Count, const S: usize, const P: bool>(
+            &self,
+            ray: &Ray,
+            counts: &mut C,
+        ) -> Option<Hit> {
+            self.prims.finish(closest!(self, ray, 0, K, avx2_pre, box8_avx2, true, counts, S, P), ray)
+        }
+    };
+}
+
 /// Any-hit traversal, generic over the box test (any order gives the same answer).
 macro_rules! any_hit {
     ($self:ident, $ray:ident, $start:expr, $k:ty, $pre:ident, $box8:ident, $simd:expr, $counts:expr, $stack:expr, $pf:expr) => {{
@@ -627,13 +645,14 @@ pub enum WalkIsa {
     /// The AVX2 walks, except the single-ray closest-hit walk, which is the
     /// same code compiled for AVX-512F and AVX-512VL: 256-bit vectors still,
     /// but 32 vector registers, mask registers and broadcasts folded into
-    /// arithmetic. On Zen 4 (`rtdiff bench --race 9 --threads 1`, the AVX2
-    /// and AVX-512 binaries alternated, three pairs, against Embree's
-    /// default MEDIUM) suzanne's incoherent rays 0.967-0.969 -> 0.980-0.987,
-    /// camera rays 1.144-1.154 -> 1.139-1.187, dragon_87k camera rays
-    /// 1.033-1.056 -> 1.060-1.072. The any-hit and packet walks stay AVX2:
-    /// compiled so too, dragon_87k's shadow rays lost 3-4% (1.132-1.155 ->
-    /// 1.081-1.115).
+    /// arithmetic. On Zen 4, in one binary (`rtdiff bench --race 9 --threads
+    /// 1`, with and without `--rtdiff-isa avx2` alternated, three pairs,
+    /// against Embree's default MEDIUM): suzanne's incoherent rays
+    /// 0.956-0.960 -> 0.984-0.990, camera rays level (1.150-1.162 against
+    /// 1.150-1.164); dragon_87k (`--race 5`, two pairs) camera rays
+    /// 1.037-1.047 -> 1.066-1.068, incoherent 1.066-1.067 -> 1.077-1.078.
+    /// The any-hit and packet walks stay AVX2: compiled so too, dragon_87k's
+    /// shadow rays lost 3-4% (1.142-1.146 -> 1.112-1.128).
     Avx512,
     /// AVX2 boxes, SSE or AVX2 packet tests.
     Avx2,
@@ -929,27 +948,17 @@ impl WideBvh {
         if self.nodes.is_empty() {
             return None;
         }
+        // SAFETY: isa is Avx512 only when the CPU reports AVX2, AVX-512F and
+        // AVX-512VL, and Avx2 only when it reports AVX2.
         #[cfg(target_arch = "x86_64")]
-        if self.isa == WalkIsa::Avx512 {
-            // SAFETY: isa is Avx512 only when the CPU reports AVX2, AVX-512F and AVX-512VL.
-            return unsafe {
-                if self.prefetch_all {
-                    self.closest_avx512_impl::<K, C, STACK, true>(ray, counts)
-                } else {
-                    self.closest_avx512_impl::<K, C, STACK, false>(ray, counts)
-                }
-            };
-        }
-        #[cfg(target_arch = "x86_64")]
-        if self.isa == WalkIsa::Avx2 {
-            // SAFETY: isa is Avx2 only when the CPU reports AVX2.
-            return unsafe {
-                if self.prefetch_all {
-                    self.closest_avx2_impl::<K, C, STACK, true>(ray, counts)
-                } else {
-                    self.closest_avx2_impl::<K, C, STACK, false>(ray, counts)
-                }
-            };
+        unsafe {
+            match (self.isa, self.prefetch_all) {
+                (WalkIsa::Avx512, false) => return self.closest_avx512_impl::<K, C, STACK, false>(ray, counts),
+                (WalkIsa::Avx512, true) => return self.closest_avx512_impl::<K, C, STACK, true>(ray, counts),
+                (WalkIsa::Avx2, false) => return self.closest_avx2_impl::<K, C, STACK, false>(ray, counts),
+                (WalkIsa::Avx2, true) => return self.closest_avx2_impl::<K, C, STACK, true>(ray, counts),
+                (WalkIsa::Portable, _) => {}
+            }
         }
         self.closest_portable_impl::<K, C, STACK>(ray, counts)
     }
@@ -1132,27 +1141,17 @@ impl WideBvh {
         any_hit!(self, ray, 0, K, portable_pre, box8_portable, false, counts, S, self.prefetch_all)
     }
 
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn closest_avx2_impl<K: TriangleKernel, C: Count, const S: usize, const P: bool>(
-        &self,
-        ray: &Ray,
-        counts: &mut C,
-    ) -> Option<Hit> {
-        self.prims.finish(closest!(self, ray, 0, K, avx2_pre, box8_avx2, true, counts, S, P), ray)
-    }
-
-    /// [`Self::closest_avx2_impl`] compiled for AVX-512F and AVX-512VL
-    /// ([`WalkIsa::Avx512`]): the same source, so the same answers bit for bit.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,avx512f,avx512vl")]
-    fn closest_avx512_impl<K: TriangleKernel, C: Count, const S: usize, const P: bool>(
-        &self,
-        ray: &Ray,
-        counts: &mut C,
-    ) -> Option<Hit> {
-        self.prims.finish(closest!(self, ray, 0, K, avx2_pre, box8_avx2, true, counts, S, P), ray)
-    }
+    simd_closest_walk!(
+        /// The AVX2 closest-hit walk.
+        closest_avx2_impl,
+        "avx2"
+    );
+    simd_closest_walk!(
+        /// [`Self::closest_avx2_impl`] compiled for AVX-512F and AVX-512VL
+        /// ([`WalkIsa::Avx512`]): the same source, so the same answers bit for bit.
+        closest_avx512_impl,
+        "avx2,avx512f,avx512vl"
+    );
 
     /// The AVX2 closest-hit walk of the subtree under node `start` alone,
     /// before [`LeafPrims::finish`] (the packet walk's switch to single rays
