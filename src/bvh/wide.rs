@@ -851,7 +851,7 @@ impl WideBvh {
 
     /// Force the portable scalar code (for testing it on AVX2 machines).
     pub fn set_scalar(&mut self) {
-        self.isa = WalkIsa::Portable;
+        self.set_isa(WalkIsa::Portable);
     }
 
     /// Run the walks compiled for `isa` (the widest set this CPU runs is the
