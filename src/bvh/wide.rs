@@ -1,7 +1,7 @@
 //! The production layout ([`super::config::NodeLayout::Wide8`], the `fast`
 //! traversal): the binary BVH collapsed into 8-wide nodes whose eight child
 //! boxes are tested at once (AVX2 when the CPU has it, with a portable scalar
-//! fallback of identical semantics), nearest-first order, early termination
+//! fallback that gives the same answers), nearest-first order, early termination
 //! against the closest hit so far, and an any-hit variant for shadow rays.
 //!
 //! Leaf triangles sit in 4-wide packets ([`super::packet`]); leaves that hold
