@@ -347,10 +347,27 @@ macro_rules! closest {
                     if mask & (mask - 1) == 0 {
                         // Two hits (the common case): push the farther, visit the nearer.
                         // Ties go to the lower lane, as in the insertion sort below.
-                        let (a, b) = if near[second] < near[first] { (second, first) } else { (first, second) };
-                        stack[sp] = MaybeUninit::new(Entry { t: near[b], child: node.child[b], count: node.count[b] });
+                        // Both entries are read first and the nearer one
+                        // picked by value (conditional moves), so the next
+                        // node's index does not wait for a load that the
+                        // comparison chose.
+                        let ef = Entry { t: near[first], child: node.child[first], count: node.count[first] };
+                        let es = Entry { t: near[second], child: node.child[second], count: node.count[second] };
+                        let swap = es.t < ef.t;
+                        let pick = |x: u32, y: u32| if swap { y } else { x };
+                        let nearer = Entry {
+                            t: f32::from_bits(pick(ef.t.to_bits(), es.t.to_bits())),
+                            child: pick(ef.child, es.child),
+                            count: pick(ef.count, es.count),
+                        };
+                        let farther = Entry {
+                            t: f32::from_bits(pick(es.t.to_bits(), ef.t.to_bits())),
+                            child: pick(es.child, ef.child),
+                            count: pick(es.count, ef.count),
+                        };
+                        stack[sp] = MaybeUninit::new(farther);
                         sp += 1;
-                        cur = Entry { t: near[a], child: node.child[a], count: node.count[a] };
+                        cur = nearer;
                         continue 'outer;
                     }
                     let k = mask.count_ones() as usize + 1;
