@@ -1455,6 +1455,34 @@ mod tests {
         (closest, any)
     }
 
+    /// Every walk of `w` (closest and any hit, single rays and packets, both
+    /// triangle tests, every instruction set the CPU runs) gives the
+    /// brute-force answers on `rays`, bit for bit; more than `min_hits` of
+    /// them hit, so the comparison is not vacuous.
+    fn assert_brute_force_answers(prims: &std::sync::Arc<Primitives>, w: &WideBvh, rays: &[Ray], min_hits: usize) {
+        let bits = |h: Option<Hit>| h.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()));
+        for (test, isa) in [TriangleTest::Watertight, TriangleTest::MollerTrumbore]
+            .into_iter()
+            .flat_map(|t| WalkIsa::supported().into_iter().map(move |i| (t, i)))
+        {
+            let brute = crate::accel::brute::BruteForce::new(prims.clone(), test);
+            let mut w = w.clone();
+            assert!(w.set_isa(isa));
+            let k = w.kernels(test);
+            let (closest, any) = batch_answers(&w, &k, rays);
+            let mut hits = 0;
+            for (i, r) in rays.iter().enumerate() {
+                let want = crate::accel::Tracer::intersect(&brute, r);
+                assert_eq!(bits(k.closest(&w, r)), bits(want), "{test:?} {isa:?} ray {i}");
+                assert_eq!(bits(closest[i]), bits(want), "{test:?} {isa:?} ray {i} in a packet");
+                assert_eq!(k.any(&w, r), want.is_some(), "{test:?} {isa:?} ray {i}");
+                assert_eq!(any[i], want.is_some(), "{test:?} {isa:?} ray {i} in a packet");
+                hits += usize::from(want.is_some());
+            }
+            assert!(hits > min_hits, "{test:?} {isa:?}: only {hits} of {} rays hit", rays.len());
+        }
+    }
+
     /// A mesh large enough for leaves priced as eight-triangle tests
     /// (`packet::WIDE_LEAVES_FROM`) gets leaves of five to eight triangles,
     /// whose two packets the AVX2 walks test at once, and every walk (single
@@ -1478,27 +1506,7 @@ mod tests {
             let (x, y) = ((i % 40) as f32 / 40.0, (i / 40) as f32 / 40.0);
             Ray::new(eye, Vec3::new(x, y, 0.5) - eye)
         }));
-        let bits = |h: Option<Hit>| h.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()));
-        for (test, isa) in [TriangleTest::Watertight, TriangleTest::MollerTrumbore]
-            .into_iter()
-            .flat_map(|t| WalkIsa::supported().into_iter().map(move |i| (t, i)))
-        {
-            let brute = crate::accel::brute::BruteForce::new(prims.clone(), test);
-            let mut w = w.clone();
-            assert!(w.set_isa(isa));
-            let k = w.kernels(test);
-            let (closest, any) = batch_answers(&w, &k, &rays);
-            let mut hits = 0;
-            for (i, r) in rays.iter().enumerate() {
-                let want = crate::accel::Tracer::intersect(&brute, r);
-                assert_eq!(bits(k.closest(&w, r)), bits(want), "{test:?} {isa:?} ray {i}");
-                assert_eq!(bits(closest[i]), bits(want), "{test:?} {isa:?} ray {i} in a packet");
-                assert_eq!(k.any(&w, r), want.is_some(), "{test:?} {isa:?} ray {i}");
-                assert_eq!(any[i], want.is_some(), "{test:?} {isa:?} ray {i} in a packet");
-                hits += usize::from(want.is_some());
-            }
-            assert!(hits > 1500, "only {hits} hits");
-        }
+        assert_brute_force_answers(&prims, &w, &rays, 1500);
     }
 
     /// Rays that run in the planes of boxes (zero direction components, the
@@ -1535,28 +1543,8 @@ mod tests {
                 Ray::new(o, d)
             })
             .collect();
-        let bits = |h: Option<Hit>| h.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()));
-        for (test, isa) in [TriangleTest::Watertight, TriangleTest::MollerTrumbore]
-            .into_iter()
-            .flat_map(|t| WalkIsa::supported().into_iter().map(move |i| (t, i)))
-        {
-            let brute = crate::accel::brute::BruteForce::new(prims.clone(), test);
-            let mut w = w.clone();
-            assert!(w.set_isa(isa));
-            let k = w.kernels(test);
-            let (closest, any) = batch_answers(&w, &k, &rays);
-            let mut hits = 0;
-            for (i, r) in rays.iter().enumerate() {
-                let want = crate::accel::Tracer::intersect(&brute, r);
-                assert_eq!(bits(k.closest(&w, r)), bits(want), "{test:?} {isa:?} ray {i}");
-                assert_eq!(bits(closest[i]), bits(want), "{test:?} {isa:?} ray {i} in a packet");
-                assert_eq!(k.any(&w, r), want.is_some(), "{test:?} {isa:?} ray {i}");
-                assert_eq!(any[i], want.is_some(), "{test:?} {isa:?} ray {i} in a packet");
-                hits += usize::from(want.is_some());
-            }
-            // Not vacuous: a good share of these rays touch the triangle whose vertex they run through.
-            assert!(hits > 1000, "only {hits} of {} hits", rays.len());
-        }
+        // Not vacuous: a good share of these rays touch the triangle whose vertex they run through.
+        assert_brute_force_answers(&prims, &w, &rays, 1000);
     }
 
     /// Packets of eight rays give every ray its single-ray answer, bit for
