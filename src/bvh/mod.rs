@@ -108,11 +108,6 @@ impl BvhTracer {
         Self { tree, cfg }
     }
 
-    /// Use the portable scalar code in the 8-wide traversal even when AVX2 is available.
-    pub fn force_scalar(&mut self) {
-        self.force_isa(WalkIsa::Portable);
-    }
-
     /// Run the 8-wide traversal's walks compiled for `isa` (tests and
     /// measurements; the widest set the CPU runs is the default). Returns
     /// false, changing nothing, when the CPU does not run `isa` or the tree

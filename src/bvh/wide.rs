@@ -878,11 +878,6 @@ impl WideBvh {
         bvh
     }
 
-    /// Force the portable scalar code (for testing it on AVX2 machines).
-    pub fn set_scalar(&mut self) {
-        self.set_isa(WalkIsa::Portable);
-    }
-
     /// Run the walks compiled for `isa` (the widest set this CPU runs is the
     /// default; a narrower one is for tests and measurements). Returns false,
     /// changing nothing, when this CPU does not run `isa`. Kernels chosen by
@@ -898,12 +893,6 @@ impl WideBvh {
     /// The instruction set the walks run ([`WalkIsa`]).
     pub fn isa(&self) -> WalkIsa {
         self.isa
-    }
-
-    /// True when the AVX2 walks run (AVX2 boxes, SSE or AVX2 packet tests):
-    /// [`WalkIsa::Avx2`] or [`WalkIsa::Avx512`].
-    pub fn uses_avx2(&self) -> bool {
-        self.isa.simd()
     }
 
     /// Memory the nodes and primitives take, in bytes (the arrays' lengths:
