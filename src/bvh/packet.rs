@@ -251,13 +251,22 @@ impl TriPackets {
     ) -> bool {
         let pks = &self.packets[first as usize..first as usize + packets_for(count)];
         if matches!(pks.len(), 1 | 2) {
-            return closest_pair(pks, ray, lr, best);
+            return closest_pair(&pks[0], pks.get(1), ray, lr, best);
         }
         let mut changed = false;
         for pq in pks.chunks(2) {
-            changed |= closest_pair(pq, ray, lr, best);
+            changed |= closest_pair(&pq[0], pq.get(1), ray, lr, best);
         }
         changed
+    }
+
+    /// The any-hit test of two leaves of at most four triangles each, at
+    /// packets `a` and `b` (anywhere in the array), in one eight-lane test
+    /// (from the AVX2 any-hit walk only: `WideBvh::two_leaves_any`).
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    pub fn occluded_two_leaves_simd(&self, a: u32, b: u32, ray: &Ray, lr: &LeafRay) -> bool {
+        occluded_pair(&self.packets[a as usize], Some(&self.packets[b as usize]), ray, lr)
     }
 
     /// SIMD watertight any-hit test of a leaf (from the AVX2 walks only;
@@ -268,9 +277,9 @@ impl TriPackets {
     pub fn occluded_leaf_simd(&self, first: u32, count: u32, ray: &Ray, lr: &LeafRay) -> bool {
         let pks = &self.packets[first as usize..first as usize + packets_for(count)];
         if matches!(pks.len(), 1 | 2) {
-            return occluded_pair(pks, ray, lr);
+            return occluded_pair(&pks[0], pks.get(1), ray, lr);
         }
-        pks.chunks(2).any(|pq| occluded_pair(pq, ray, lr))
+        pks.chunks(2).any(|pq| occluded_pair(&pq[0], pq.get(1), ray, lr))
     }
 
     /// SIMD Moller-Trumbore closest-hit test of a leaf; same results as
@@ -285,7 +294,7 @@ impl TriPackets {
         let mut changed = false;
         for pq in self.packets[first as usize..first as usize + packets_for(count)].chunks(2) {
             let (ok, rows) = moller_trumbore_pair(pq, ray);
-            changed |= offer_lanes(ok, pq, &rows, ray, best);
+            changed |= offer_lanes(ok, |i| &pq[i], &rows, ray, best);
         }
         changed
     }
@@ -477,51 +486,61 @@ unsafe fn tri8_avx(
     }
 }
 
-/// The closest-hit test of one or two consecutive packets `pq` (see
+/// The closest-hit test of packet `p` and, when given, packet `q` (see
 /// [`TriPackets::intersect_leaf_simd`]): hits offered to `best`, uncertain
 /// lanes decided by the scalar routine. Returns true when `best` changed.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn closest_pair(pq: &[Tri4], ray: &mut Ray, lr: &LeafRay, best: &mut Option<Hit>) -> bool {
+fn closest_pair(p: &Tri4, q: Option<&Tri4>, ray: &mut Ray, lr: &LeafRay, best: &mut Option<Hit>) -> bool {
     let mut changed = false;
-    let (ok, mut zero, rows) = watertight_pair(pq, ray, lr);
+    let (ok, mut zero, rows) = watertight_pair(p, q, ray, lr);
+    // Lanes 4-7 exist only with `q`.
+    let pk = |i: usize| if i == 0 { p } else { q.unwrap_or(p) };
     while zero != 0 {
         let l = zero.trailing_zeros() as usize;
         zero &= zero - 1;
-        let (p, k) = (&pq[l / PW], l % PW);
+        let (p, k) = (pk(l / PW), l % PW);
         if let Some((t, u, v)) = watertight(ray, &lr.wr(), p.vertex(0, k), p.vertex(1, k), p.vertex(2, k)) {
             changed |= offer(best, ray, t, p.id[k], u, v);
         }
     }
-    changed |= offer_lanes(ok, pq, &rows, ray, best);
+    changed |= offer_lanes(ok, pk, &rows, ray, best);
     changed
 }
 
-/// Offer the hits of lanes `ok` of packets `pq` (`rows`: their `t, u, v`) under [`Hit::offer`]'s tie rule.
+/// Offer the hits of lanes `ok` (`rows`: their `t, u, v`; `pk(i)`: the packet of lanes `4 i .. 4 i + 4`)
+/// under [`Hit::offer`]'s tie rule.
 #[inline(always)]
-fn offer_lanes(mut ok: u32, pq: &[Tri4], rows: &[[f32; 2 * PW]; 3], ray: &mut Ray, best: &mut Option<Hit>) -> bool {
+fn offer_lanes<'a>(
+    mut ok: u32,
+    pk: impl Fn(usize) -> &'a Tri4,
+    rows: &[[f32; 2 * PW]; 3],
+    ray: &mut Ray,
+    best: &mut Option<Hit>,
+) -> bool {
     let mut changed = false;
     while ok != 0 {
         let l = ok.trailing_zeros() as usize;
         ok &= ok - 1;
-        changed |= offer(best, ray, rows[0][l], pq[l / PW].id[l % PW], rows[1][l], rows[2][l]);
+        changed |= offer(best, ray, rows[0][l], pk(l / PW).id[l % PW], rows[1][l], rows[2][l]);
     }
     changed
 }
 
-/// The any-hit test of one or two consecutive packets `pq` (see
+/// The any-hit test of packet `p` and, when given, packet `q` (see
 /// [`TriPackets::occluded_leaf_simd`]).
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn occluded_pair(pq: &[Tri4], ray: &Ray, lr: &LeafRay) -> bool {
-    let (ok, mut zero, _) = watertight_pair(pq, ray, lr);
+fn occluded_pair(p: &Tri4, q: Option<&Tri4>, ray: &Ray, lr: &LeafRay) -> bool {
+    let (ok, mut zero, _) = watertight_pair(p, q, ray, lr);
     if ok != 0 {
         return true;
     }
+    let pk = |i: usize| if i == 0 { p } else { q.unwrap_or(p) };
     while zero != 0 {
         let l = zero.trailing_zeros() as usize;
         zero &= zero - 1;
-        let (p, k) = (&pq[l / PW], l % PW);
+        let (p, k) = (pk(l / PW), l % PW);
         if watertight(ray, &lr.wr(), p.vertex(0, k), p.vertex(1, k), p.vertex(2, k)).is_some() {
             return true;
         }
@@ -529,15 +548,15 @@ fn occluded_pair(pq: &[Tri4], ray: &Ray, lr: &LeafRay) -> bool {
     false
 }
 
-/// The watertight test of one or two consecutive packets `pq` (lanes 0-3:
-/// `pq[0]`, lanes 4-7: `pq[1]`): `(hit mask, uncertain mask, [t, u, v])`,
+/// The watertight test of packet `p` and, when given, packet `q` (lanes 0-3:
+/// `p`, lanes 4-7: `q`): `(hit mask, uncertain mask, [t, u, v])`,
 /// the rows written only when some lane is a hit. Inside the AVX2 walks only.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn watertight_pair(pq: &[Tri4], ray: &Ray, lr: &LeafRay) -> (u32, u32, [[f32; 2 * PW]; 3]) {
+fn watertight_pair(p: &Tri4, q: Option<&Tri4>, ray: &Ray, lr: &LeafRay) -> (u32, u32, [[f32; 2 * PW]; 3]) {
     use std::arch::x86_64::*;
     let mut rows = [[0.0f32; 2 * PW]; 3];
-    if let [p, q] = pq {
+    if let Some(q) = q {
         // SAFETY: the callers run inside the AVX2 walks, on CPUs with AVX2.
         let (ok, zero, t, u, v) = unsafe { tri8_avx(p, q, ray, lr) };
         if ok != 0 {
@@ -548,7 +567,7 @@ fn watertight_pair(pq: &[Tri4], ray: &Ray, lr: &LeafRay) -> (u32, u32, [[f32; 2 
         }
         return (ok, zero, rows);
     }
-    let (ok, zero, t, u, v) = tri4_sse(&pq[0], ray, lr);
+    let (ok, zero, t, u, v) = tri4_sse(p, ray, lr);
     if ok != 0 {
         for (row, x) in rows.iter_mut().zip([t, u, v]) {
             // SAFETY: SSE is part of the x86_64 baseline; each row holds at least 4 floats.
@@ -820,7 +839,7 @@ mod tests {
                 }
                 let lr = LeafRay::new(&ray);
                 let pq = [p, q];
-                let (mask, unc, [ts, us, vs]) = watertight_pair(&pq[..n], &ray, &lr);
+                let (mask, unc, [ts, us, vs]) = watertight_pair(&pq[0], pq[..n].get(1), &ray, &lr);
                 assert_eq!(mask & unc, 0, "a lane both hit and uncertain");
                 assert_eq!((mask | unc) >> (PW * n), 0, "a lane past the packets");
                 for l in 0..PW * n {

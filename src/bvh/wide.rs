@@ -21,7 +21,7 @@ use crate::geometry::triangle::TriangleKernel;
 use crate::geometry::{Hit, Primitives, Ray, TriangleTest};
 
 use super::build::BuiltTree;
-use super::packet::{LeafRay, TriPackets, packets_for};
+use super::packet::{LeafRay, PW, TriPackets, packets_for};
 use super::slab::{cull_bound, far_scale};
 use super::{BinaryBvh, LeafPrims, Node};
 
@@ -541,11 +541,27 @@ macro_rules! any_hit {
             // next, is also kept in `next` and its slot dropped.
             let base = sp;
             let mut next = 0;
+            // Leaves of one packet (at most four triangles) are tested two at
+            // a time, in one eight-lane test (see `two_leaves_any`): one held
+            // here until the next one comes, or to the end of the node.
+            let mut held: Option<(u32, u32)> = None;
             while mask != 0 {
                 let l = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
                 let count = node.count[l];
-                if count > 0 {
+                if $simd && <$k as TriangleKernel>::WATERTIGHT && count.wrapping_sub(1) < PW as u32 {
+                    let b = node.child[l];
+                    match held.take() {
+                        None => held = Some((b, count)),
+                        Some((a, ca)) => {
+                            $counts.leaf(a, ca);
+                            $counts.leaf(b, count);
+                            if $self.two_leaves_any::<$k>((a, ca), (b, count), $ray, &lr, $simd) {
+                                return true;
+                            }
+                        }
+                    }
+                } else if count > 0 {
                     let n = count & !ENTRY_LEAF;
                     $counts.leaf(node.child[l], n);
                     let hit = if count & ENTRY_LEAF != 0 {
@@ -563,6 +579,12 @@ macro_rules! any_hit {
                     if $pf {
                         $self.prefetch_node(node.child[l]);
                     }
+                }
+            }
+            if let Some((a, ca)) = held {
+                $counts.leaf(a, ca);
+                if $self.packets_any::<$k>(a, ca, $ray, &lr, $simd) {
+                    return true;
                 }
             }
             cur = if sp > base {
@@ -1122,6 +1144,44 @@ impl WideBvh {
         pk.intersect_leaf_scalar::<K>(first, count, ray, &lr.wr(), best)
     }
 
+    /// [`Self::packets_any`] of two leaves of one packet each (at most four
+    /// triangles), at packets `a` and `b`, in one eight-lane test: the any-hit
+    /// walk's leaves in pairs.
+    ///
+    /// The leaves a shadow ray enters at one node were tested one after the
+    /// other, each a chain of dependent operations (the watertight test, its
+    /// division, the masks) that the next one's could overlap only as far as
+    /// the branch between them let it; two leaves in one test take one chain.
+    /// Any order gives the same answer, so the pairs need no rule. `rtdiff
+    /// bench --race 5 --threads 1`, alternated binaries, against Embree's
+    /// default mode: suzanne shadow rays 1.015-1.026 -> 1.09-1.13 (camera and
+    /// incoherent rays, whose walk this is not, level); both sides on AVX2
+    /// (`--rtdiff-isa avx2 --embree-max-isa avx2`) 1.011-1.015 -> 1.043-1.075;
+    /// dragon_87k (mostly leaves of five to eight triangles, one packet pair
+    /// each already) level. The same pairing in the closest-hit walk (the
+    /// nearest two entered leaves tested together, the farther no longer
+    /// culled by a hit in the nearer) did not pay: suzanne incoherent level,
+    /// camera rays 1.18-1.20 -> 1.12-1.15 (docs/bvh.md, twenty-second pass).
+    ///
+    /// `a` and `b` are `(first packet, triangle count)`; without `simd` (or
+    /// off x86-64) the two leaves go through [`Self::packets_any`] in turn.
+    #[inline(always)]
+    pub(super) fn two_leaves_any<K: TriangleKernel>(
+        &self,
+        a: (u32, u32),
+        b: (u32, u32),
+        ray: &Ray,
+        lr: &LeafRay,
+        simd: bool,
+    ) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if simd && K::WATERTIGHT {
+            let Some(pk) = &self.packets else { return false };
+            return pk.occluded_two_leaves_simd(a.0, b.0, ray, lr);
+        }
+        self.packets_any::<K>(a.0, a.1, ray, lr, simd) || self.packets_any::<K>(b.0, b.1, ray, lr, simd)
+    }
+
     /// Any-hit test of a triangle leaf (see [`Self::packets_closest`]).
     #[inline(always)]
     pub(super) fn packets_any<K: TriangleKernel>(
@@ -1533,6 +1593,29 @@ mod tests {
             })
             .collect();
         // Not vacuous: a good share of these rays touch the triangle whose vertex they run through.
+        assert_brute_force_answers(&prims, &w, &rays, 1000);
+    }
+
+    /// Shadow-ray segments between points of a soup's bounds give the
+    /// brute-force answers on every walk: the any-hit walk tests the leaves of
+    /// one packet two at a time (`two_leaves_any`), and this tree has many
+    /// nodes with two or more such leaves for the pairs to form.
+    #[test]
+    fn leaves_tested_in_pairs_give_the_brute_force_answers() {
+        let prims = std::sync::Arc::new(soup(3000, 23));
+        let w = super::super::build_wide(&prims, &AccelConfig::default());
+        let small = |n: &WideNode| (0..WIDTH).filter(|&l| n.count[l].wrapping_sub(1) < PW as u32).count();
+        let paired = w.nodes.iter().filter(|n| small(n) >= 2).count();
+        assert!(paired * 2 > w.nodes.len(), "only {paired} of {} nodes hold two one-packet leaves", w.nodes.len());
+        let b = prims.world_bounds();
+        let mut rng = Pcg32::new(31, 0);
+        let mut point = || b.min + (b.max - b.min) * Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+        let rays: Vec<Ray> = (0..8000)
+            .map(|_| {
+                let (p, q) = (point(), point());
+                Ray::with_range(p, q - p, 0.0, 1.0)
+            })
+            .collect();
         assert_brute_force_answers(&prims, &w, &rays, 1000);
     }
 
