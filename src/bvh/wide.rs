@@ -1153,12 +1153,12 @@ impl WideBvh {
     /// division, the masks) that the next one's could overlap only as far as
     /// the branch between them let it; two leaves in one test take one chain.
     /// Any order gives the same answer, so the pairs need no rule. `rtdiff
-    /// bench --race 5 --threads 1`, alternated binaries, against Embree's
-    /// default mode: suzanne shadow rays 1.015-1.026 -> 1.09-1.13 (camera and
-    /// incoherent rays, whose walk this is not, level); both sides on AVX2
-    /// (`--rtdiff-isa avx2 --embree-max-isa avx2`) 1.011-1.015 -> 1.043-1.075;
-    /// dragon_87k (mostly leaves of five to eight triangles, one packet pair
-    /// each already) level. The same pairing in the closest-hit walk (the
+    /// bench --race 5 --threads 1`, alternated binaries (three pairs),
+    /// against Embree's default mode: suzanne shadow rays 0.984-1.030 ->
+    /// 1.066-1.117 (camera and incoherent rays, whose walk this is not,
+    /// level); both sides on AVX2 (`--rtdiff-isa avx2 --embree-max-isa
+    /// avx2`, two pairs) 1.011-1.015 -> 1.043-1.075; dragon_87k (mostly
+    /// leaves of five to eight triangles, one packet pair each already) level. The same pairing in the closest-hit walk (the
     /// nearest two entered leaves tested together, the farther no longer
     /// culled by a hit in the nearer) did not pay: suzanne incoherent level,
     /// camera rays 1.18-1.20 -> 1.12-1.15 (docs/bvh.md, twenty-second pass).
