@@ -36,7 +36,7 @@ fn main() -> rtdiff::Result<()> {
     let prims = rtdiff::rays::load_primitives(std::path::Path::new(&path), true)?;
     let cfg = AccelConfig { builder: Builder::Sah, bins, ..Default::default() };
     let bvh = rtdiff::bvh::build_wide(&prims, &cfg);
-    line(format_args!("{path}: {} primitives, {} wide nodes", prims.len(), bvh.nodes.len()));
+    line(format_args!("{path}: {} primitives, {} wide nodes", prims.len(), bvh.nodes().len()));
     line(format_args!(
         "{:<22} {:>10} {:>10} {:>12} {:>14}",
         "rays", "nodes/ray", "leaves/ray", "packets/ray", "packets/leaf"

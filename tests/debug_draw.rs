@@ -106,9 +106,9 @@ fn the_green_path_ends_in_the_leaf_holding_the_hit() {
                                 .collect()
                         }
                         (None, Some(w)) => {
-                            let pk = w.packets.as_ref().expect("a triangle mesh is packed");
+                            let pk = w.packets().expect("a triangle mesh is packed");
                             let count = w
-                                .nodes
+                                .nodes()
                                 .iter()
                                 .flat_map(|n| n.child.iter().zip(n.count))
                                 .find(|(c, k)| **c == leaf && *k > 0)

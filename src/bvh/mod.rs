@@ -206,12 +206,8 @@ impl Tracer for BvhTracer {
     #[inline]
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
         match &self.tree {
-            Tree::Wide(w, k) => {
-                if !ray.is_traceable() {
-                    return None;
-                }
-                k.closest(w, ray)
-            }
+            // (`Kernels` answers none for a ray that is not traceable.)
+            Tree::Wide(w, k) => k.closest(w, ray),
             Tree::Binary(_) => self.intersect_with(ray, &mut ()),
         }
     }
@@ -219,7 +215,7 @@ impl Tracer for BvhTracer {
     #[inline]
     fn occluded(&self, ray: &Ray) -> bool {
         match &self.tree {
-            Tree::Wide(w, k) => ray.is_traceable() && k.any(w, ray),
+            Tree::Wide(w, k) => k.any(w, ray),
             Tree::Binary(_) => self.occluded_with(ray, &mut ()),
         }
     }

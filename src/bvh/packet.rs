@@ -220,7 +220,8 @@ impl TriPackets {
         })
     }
 
-    /// SIMD watertight closest-hit test of a leaf; same results as
+    /// SIMD watertight closest-hit test of a leaf, whose packets are `pks`
+    /// (the walk finds them, [`crate::bvh::WideBvh`]); same results as
     /// [`Self::intersect_leaf_scalar`] with the watertight test. Called from
     /// the AVX2 walks only (its packets go two at a time through `tri8_avx`).
     ///
@@ -241,15 +242,7 @@ impl TriPackets {
     /// 1.116-1.148 -> 1.144-1.163.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    pub fn intersect_leaf_simd(
-        &self,
-        first: u32,
-        count: u32,
-        ray: &mut Ray,
-        lr: &LeafRay,
-        best: &mut Option<Hit>,
-    ) -> bool {
-        let pks = &self.packets[first as usize..first as usize + packets_for(count)];
+    pub fn intersect_leaf_simd(pks: &[Tri4], ray: &mut Ray, lr: &LeafRay, best: &mut Option<Hit>) -> bool {
         if matches!(pks.len(), 1 | 2) {
             return closest_pair(&pks[0], pks.get(1), ray, lr, best);
         }
@@ -260,50 +253,48 @@ impl TriPackets {
         changed
     }
 
-    /// The any-hit test of two leaves of at most four triangles each, at
-    /// packets `a` and `b` (anywhere in the array), in one eight-lane test
-    /// (from the AVX2 any-hit walk only: `WideBvh::two_leaves_any`).
+    /// The any-hit test of two leaves of at most four triangles each, packets
+    /// `a` and `b` (anywhere in the array), in one eight-lane test (from the
+    /// AVX2 any-hit walk only: `WideBvh::two_leaves_any`).
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    pub fn occluded_two_leaves_simd(&self, a: u32, b: u32, ray: &Ray, lr: &LeafRay) -> bool {
-        occluded_pair(&self.packets[a as usize], Some(&self.packets[b as usize]), ray, lr)
+    pub fn occluded_two_leaves_simd(a: &Tri4, b: &Tri4, ray: &Ray, lr: &LeafRay) -> bool {
+        occluded_pair(a, Some(b), ray, lr)
     }
 
-    /// SIMD watertight any-hit test of a leaf (from the AVX2 walks only;
-    /// one pair test for leaves of at most two packets, as in
+    /// SIMD watertight any-hit test of a leaf of packets `pks` (from the AVX2
+    /// walks only; one pair test for leaves of at most two packets, as in
     /// [`Self::intersect_leaf_simd`]).
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    pub fn occluded_leaf_simd(&self, first: u32, count: u32, ray: &Ray, lr: &LeafRay) -> bool {
-        let pks = &self.packets[first as usize..first as usize + packets_for(count)];
+    pub fn occluded_leaf_simd(pks: &[Tri4], ray: &Ray, lr: &LeafRay) -> bool {
         if matches!(pks.len(), 1 | 2) {
             return occluded_pair(&pks[0], pks.get(1), ray, lr);
         }
         pks.chunks(2).any(|pq| occluded_pair(&pq[0], pq.get(1), ray, lr))
     }
 
-    /// SIMD Moller-Trumbore closest-hit test of a leaf; same results as
+    /// SIMD Moller-Trumbore closest-hit test of a leaf of packets `pks`; same results as
     /// [`Self::intersect_leaf_scalar`] with the Moller-Trumbore test (lane
     /// for lane the scalar routine's operations).
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    pub fn intersect_leaf_simd_mt(&self, first: u32, count: u32, ray: &mut Ray, best: &mut Option<Hit>) -> bool {
+    pub fn intersect_leaf_simd_mt(pks: &[Tri4], ray: &mut Ray, best: &mut Option<Hit>) -> bool {
         // (Unlike the watertight test's, this loop keeps no one-pair form:
         // written as in `intersect_leaf_simd` it took more instructions,
         // callgrind, 20,000 rays: suzanne incoherent 11.86M -> 13.61M.)
         let mut changed = false;
-        for pq in self.packets[first as usize..first as usize + packets_for(count)].chunks(2) {
+        for pq in pks.chunks(2) {
             let (ok, rows) = moller_trumbore_pair(pq, ray);
             changed |= offer_lanes(ok, |i| &pq[i], &rows, ray, best);
         }
         changed
     }
 
-    /// SIMD Moller-Trumbore any-hit test of a leaf (from the AVX2 walks only).
+    /// SIMD Moller-Trumbore any-hit test of a leaf of packets `pks` (from the AVX2 walks only).
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    pub fn occluded_leaf_simd_mt(&self, first: u32, count: u32, ray: &Ray) -> bool {
-        let pks = &self.packets[first as usize..first as usize + packets_for(count)];
+    pub fn occluded_leaf_simd_mt(pks: &[Tri4], ray: &Ray) -> bool {
         if matches!(pks.len(), 1 | 2) {
             return moller_trumbore_pair(pks, ray).0 != 0;
         }
@@ -802,10 +793,10 @@ mod tests {
             &mut best
         ));
         best = None;
-        assert!(!pk.intersect_leaf_simd(0, 0, &mut ray, &lr, &mut best));
+        assert!(!TriPackets::intersect_leaf_simd(&pk.packets[..0], &mut ray, &lr, &mut best));
         assert!(best.is_none());
-        assert!(!pk.occluded_leaf_simd(0, 0, &ray, &lr));
-        assert!(!pk.occluded_leaf_simd_mt(0, 0, &ray));
+        assert!(!TriPackets::occluded_leaf_simd(&pk.packets[..0], &ray, &lr));
+        assert!(!TriPackets::occluded_leaf_simd_mt(&pk.packets[..0], &ray));
     }
 
     #[test]

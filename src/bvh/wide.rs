@@ -21,7 +21,7 @@ use crate::geometry::triangle::TriangleKernel;
 use crate::geometry::{Hit, Primitives, Ray, TriangleTest};
 
 use super::build::BuiltTree;
-use super::packet::{LeafRay, PW, TriPackets, packets_for};
+use super::packet::{LeafRay, PW, Tri4, TriPackets, packets_for};
 use super::slab::{cull_bound, far_scale};
 use super::{BinaryBvh, LeafPrims, Node};
 
@@ -307,6 +307,7 @@ struct Entry {
 /// [`LeafPrims::finish`] (a sphere's `(u, v)` not yet made).
 macro_rules! closest {
     ($self:ident, $ray:ident, $start:expr, $k:ty, $pre:ident, $box8:ident, $simd:expr, $counts:expr, $stack:expr, $pf:expr) => {{
+        debug_assert!($ray.is_traceable(), "the walks take traceable rays only");
         let pre = WidePre::new($ray);
         let q = $pre!(&pre);
         // The shear of the triangle test, made at the first node where the
@@ -326,7 +327,14 @@ macro_rules! closest {
         let mut near = [0.0f32; WIDTH];
         'outer: loop {
             if cur.count == 0 {
-                let node = &nodes[cur.child as usize];
+                debug_assert!((cur.child as usize) < nodes.len(), "node {} of {}", cur.child, nodes.len());
+                // SAFETY: `cur` is the start node (a node, by the caller) or
+                // a lane the box test entered with count 0. Such a lane is an
+                // inner node, whose index `check_links` bounded when the tree
+                // was built, or an empty lane, which no ray with a finite
+                // origin and direction enters (`check_links`), and the walks
+                // take no other (`Kernels::closest`).
+                let node = unsafe { nodes.get_unchecked(cur.child as usize) };
                 $counts.node(cur.child);
                 let mut mask = $box8!(node, &q, cull, &mut near);
                 if mask != 0 {
@@ -466,7 +474,8 @@ macro_rules! closest {
 
 /// The SIMD closest-hit walk from the root as method `$name` of [`WideBvh`],
 /// compiled for the target features `$features` (one definition for every
-/// instruction set the walk is compiled for, [`WalkIsa`]).
+/// instruction set the walk is compiled for, [`WalkIsa`]). Its callers
+/// guarantee the features and a traceable ray ([`ClosestFn`]).
 macro_rules! simd_closest_walk {
     ($(#[$doc:meta])* $name:ident, $features:literal) => {
         $(#[$doc])*
@@ -485,6 +494,7 @@ macro_rules! simd_closest_walk {
 /// Any-hit traversal, generic over the box test (any order gives the same answer).
 macro_rules! any_hit {
     ($self:ident, $ray:ident, $start:expr, $k:ty, $pre:ident, $box8:ident, $simd:expr, $counts:expr, $stack:expr, $pf:expr) => {{
+        debug_assert!($ray.is_traceable(), "the walks take traceable rays only");
         let pre = WidePre::new($ray);
         let q = $pre!(&pre);
         // The shear, made at the first node the ray enters (see `shear`),
@@ -506,7 +516,10 @@ macro_rules! any_hit {
         let nodes = &$self.nodes[..];
         let mut near = [0.0f32; WIDTH];
         loop {
-            let node = &nodes[cur as usize];
+            debug_assert!((cur as usize) < nodes.len(), "node {cur} of {}", nodes.len());
+            // SAFETY: as in `closest!`: `cur` is the start node or an entered
+            // inner lane (the ray has a finite origin and direction).
+            let node = unsafe { nodes.get_unchecked(cur as usize) };
             $counts.node(cur);
             let mut mask = $box8!(node, &q, cull, &mut near);
             if at_root && mask != 0 {
@@ -602,14 +615,18 @@ macro_rules! any_hit {
     }};
 }
 
-/// A closest-hit entry point of one configuration.
+/// A closest-hit entry point of one configuration. Unsafe to call: the
+/// CPU must run its instruction set and the ray must be [`Ray::is_traceable`]
+/// (the walks follow the tree's links without bounds checks, see
+/// [`check_links`]); [`Kernels`] checks both.
 pub type ClosestFn = unsafe fn(&WideBvh, &Ray) -> Option<Hit>;
-/// An any-hit entry point of one configuration.
+/// An any-hit entry point of one configuration (the contract of [`ClosestFn`]).
 pub type AnyFn = unsafe fn(&WideBvh, &Ray) -> bool;
 
-/// A closest-hit entry point for a packet of up to eight rays.
+/// A closest-hit entry point for a packet of up to eight traceable rays
+/// (the contract of [`ClosestFn`]).
 pub type Closest8Fn = unsafe fn(&WideBvh, &[Ray], &mut [Option<Hit>]);
-/// An any-hit entry point for a packet of up to eight rays.
+/// An any-hit entry point for a packet of up to eight traceable rays.
 pub type Any8Fn = unsafe fn(&WideBvh, &[Ray], &mut [bool]);
 
 /// The monomorphised traversal entry points of one configuration (triangle
@@ -629,19 +646,25 @@ impl std::fmt::Debug for Kernels {
 }
 
 impl Kernels {
-    /// Closest hit of `ray` in `bvh`, which must be the tree these kernels were chosen for.
+    /// Closest hit of `ray` in `bvh`, which must be the tree these kernels were chosen for;
+    /// none for a ray that is not [`Ray::is_traceable`] (the walks take
+    /// traceable rays only: see [`check_links`]).
     #[inline(always)]
     pub fn closest(&self, bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
+        if !ray.is_traceable() {
+            return None;
+        }
         // SAFETY: `WideBvh::kernels` only hands out AVX2 (AVX-512) entry points when the CPU has AVX2
-        // (AVX2, AVX-512F and AVX-512VL).
+        // (AVX2, AVX-512F and AVX-512VL); the ray is traceable.
         unsafe { (self.closest)(bvh, ray) }
     }
 
-    /// Whether anything is hit along `ray` in `bvh`.
+    /// Whether anything is hit along `ray` in `bvh` (false for a ray that is
+    /// not [`Ray::is_traceable`]).
     #[inline(always)]
     pub fn any(&self, bvh: &WideBvh, ray: &Ray) -> bool {
         // SAFETY: as in `closest`.
-        unsafe { (self.any)(bvh, ray) }
+        ray.is_traceable() && unsafe { (self.any)(bvh, ray) }
     }
 
     /// Closest hits of `rays` into `out` (same length), eight rays at a time
@@ -762,11 +785,13 @@ impl WalkIsa {
 #[derive(Clone, Debug)]
 pub struct WideBvh {
     /// Nodes; node 0 is the root. Empty when there are no primitives.
-    pub nodes: Vec<WideNode>,
+    /// Private to the module tree: the walks follow its links without
+    /// bounds checks, which [`check_links`] made safe when the tree was built.
+    pub(super) nodes: Vec<WideNode>,
     /// Primitives of the [`ENTRY_LEAF`] leaves (those holding a sphere), in leaf order.
-    pub prims: LeafPrims,
+    pub(super) prims: LeafPrims,
     /// The triangles of every other leaf in 4-wide packets (None when there are no triangles).
-    pub packets: Option<TriPackets>,
+    pub(super) packets: Option<TriPackets>,
     isa: WalkIsa,
     /// Wide nodes on the longest root-to-leaf path (sizes the traversal stack).
     levels: usize,
@@ -895,9 +920,25 @@ impl WideBvh {
     /// The tree of `nodes` over `prims` and `packets`, with its depth, the
     /// CPU's instruction set and the prefetch choice.
     fn finish(nodes: Vec<WideNode>, prims: LeafPrims, packets: Option<TriPackets>) -> Self {
+        check_links(&nodes, packets.as_ref());
         let mut bvh = Self { levels: levels(&nodes), nodes, prims, packets, isa: detect_isa(), prefetch_all: false };
         bvh.prefetch_all = bvh.bytes() > PREFETCH_ALL_BYTES;
         bvh
+    }
+
+    /// The nodes; node 0 is the root (none when there are no primitives).
+    pub fn nodes(&self) -> &[WideNode] {
+        &self.nodes
+    }
+
+    /// The primitives of the [`ENTRY_LEAF`] leaves (those holding a sphere), in leaf order.
+    pub fn prims(&self) -> &LeafPrims {
+        &self.prims
+    }
+
+    /// The triangles of every other leaf in 4-wide packets (None when there are no triangles).
+    pub fn packets(&self) -> Option<&TriPackets> {
+        self.packets.as_ref()
     }
 
     /// Run the walks compiled for `isa` (the widest set this CPU runs is the
@@ -985,11 +1026,11 @@ impl WideBvh {
     }
 
     fn closest_counting<K: TriangleKernel, C: Count>(&self, ray: &Ray, counts: &mut C) -> Option<Hit> {
-        if self.nodes.is_empty() {
+        if self.nodes.is_empty() || !ray.is_traceable() {
             return None;
         }
         // SAFETY: isa is Avx512 only when the CPU reports AVX2, AVX-512F and
-        // AVX-512VL, and Avx2 only when it reports AVX2.
+        // AVX-512VL, and Avx2 only when it reports AVX2; the ray is traceable.
         #[cfg(target_arch = "x86_64")]
         unsafe {
             match (self.isa, self.prefetch_all) {
@@ -1000,7 +1041,8 @@ impl WideBvh {
                 (WalkIsa::Portable, _) => {}
             }
         }
-        self.closest_portable_impl::<K, C, STACK>(ray, counts)
+        // SAFETY: the ray is traceable.
+        unsafe { self.closest_portable_impl::<K, C, STACK>(ray, counts) }
     }
 
     /// True when anything is hit within the ray's interval.
@@ -1021,12 +1063,12 @@ impl WideBvh {
     }
 
     fn any_counting<K: TriangleKernel, C: Count>(&self, ray: &Ray, counts: &mut C) -> bool {
-        if self.nodes.is_empty() {
+        if self.nodes.is_empty() || !ray.is_traceable() {
             return false;
         }
         #[cfg(target_arch = "x86_64")]
         if self.isa.simd() {
-            // SAFETY: isa is Avx2 or Avx512 only when the CPU reports AVX2.
+            // SAFETY: isa is Avx2 or Avx512 only when the CPU reports AVX2; the ray is traceable.
             return unsafe {
                 if self.prefetch_all {
                     self.any_avx2_impl::<K, C, STACK, true>(ray, counts)
@@ -1035,7 +1077,8 @@ impl WideBvh {
                 }
             };
         }
-        self.any_portable_impl::<K, C, STACK>(ray, counts)
+        // SAFETY: the ray is traceable.
+        unsafe { self.any_portable_impl::<K, C, STACK>(ray, counts) }
     }
 
     /// Ask the cache for the four lines of node `c`: the any-hit walks
@@ -1135,9 +1178,10 @@ impl WideBvh {
         let Some(pk) = &self.packets else { return false };
         #[cfg(target_arch = "x86_64")]
         if simd {
+            let pks = leaf_packets(pk, first, count);
             return match K::TEST {
-                TriangleTest::Watertight => pk.intersect_leaf_simd(first, count, ray, lr, best),
-                TriangleTest::MollerTrumbore => pk.intersect_leaf_simd_mt(first, count, ray, best),
+                TriangleTest::Watertight => TriPackets::intersect_leaf_simd(pks, ray, lr, best),
+                TriangleTest::MollerTrumbore => TriPackets::intersect_leaf_simd_mt(pks, ray, best),
             };
         }
         let _ = simd;
@@ -1177,7 +1221,12 @@ impl WideBvh {
         #[cfg(target_arch = "x86_64")]
         if simd && K::WATERTIGHT {
             let Some(pk) = &self.packets else { return false };
-            return pk.occluded_two_leaves_simd(a.0, b.0, ray, lr);
+            let (pa, pb) = (leaf_packets(pk, a.0, a.1), leaf_packets(pk, b.0, b.1));
+            debug_assert!(pa.len() == 1 && pb.len() == 1, "two leaves of one packet each");
+            // SAFETY: each leaf holds one to four triangles (the caller's
+            // condition), so one packet: `pa` and `pb` are one long.
+            let (pa, pb) = unsafe { (pa.get_unchecked(0), pb.get_unchecked(0)) };
+            return TriPackets::occluded_two_leaves_simd(pa, pb, ray, lr);
         }
         self.packets_any::<K>(a.0, a.1, ray, lr, simd) || self.packets_any::<K>(b.0, b.1, ray, lr, simd)
     }
@@ -1195,17 +1244,23 @@ impl WideBvh {
         let Some(pk) = &self.packets else { return false };
         #[cfg(target_arch = "x86_64")]
         if simd {
+            let pks = leaf_packets(pk, first, count);
             return match K::TEST {
-                TriangleTest::Watertight => pk.occluded_leaf_simd(first, count, ray, lr),
-                TriangleTest::MollerTrumbore => pk.occluded_leaf_simd_mt(first, count, ray),
+                TriangleTest::Watertight => TriPackets::occluded_leaf_simd(pks, ray, lr),
+                TriangleTest::MollerTrumbore => TriPackets::occluded_leaf_simd_mt(pks, ray),
             };
         }
         let _ = simd;
         pk.occluded_leaf_scalar::<K>(first, count, ray, &lr.wr())
     }
 
+    /// The portable closest-hit walk.
+    ///
+    /// # Safety
+    /// `ray` must be [`Ray::is_traceable`] (see [`check_links`]), as for
+    /// every walk below (the SIMD ones also need their instruction sets).
     #[inline(always)]
-    fn closest_portable_impl<K: TriangleKernel, C: Count, const S: usize>(
+    unsafe fn closest_portable_impl<K: TriangleKernel, C: Count, const S: usize>(
         &self,
         ray: &Ray,
         counts: &mut C,
@@ -1214,8 +1269,12 @@ impl WideBvh {
             .finish(closest!(self, ray, 0, K, portable_pre, box8_portable, false, counts, S, self.prefetch_all), ray)
     }
 
+    /// The portable any-hit walk.
+    ///
+    /// # Safety
+    /// `ray` must be [`Ray::is_traceable`].
     #[inline(always)]
-    fn any_portable_impl<K: TriangleKernel, C: Count, const S: usize>(&self, ray: &Ray, counts: &mut C) -> bool {
+    unsafe fn any_portable_impl<K: TriangleKernel, C: Count, const S: usize>(&self, ray: &Ray, counts: &mut C) -> bool {
         any_hit!(self, ray, 0, K, portable_pre, box8_portable, false, counts, S, self.prefetch_all)
     }
 
@@ -1233,7 +1292,8 @@ impl WideBvh {
 
     /// The AVX2 closest-hit walk of the subtree under node `start` alone,
     /// before [`LeafPrims::finish`] (the packet walk's switch to single rays
-    /// when few of its rays are left).
+    /// when few of its rays are left). The caller guarantees AVX2, a node
+    /// `start` of this tree and a traceable ray.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     pub(super) fn closest_avx2_from<K: TriangleKernel, const S: usize, const P: bool>(
@@ -1244,6 +1304,7 @@ impl WideBvh {
         closest!(self, ray, start, K, avx2_pre, box8_avx2, true, &mut (), S, P)
     }
 
+    /// The AVX2 any-hit walk from the root (its callers guarantee AVX2 and a traceable ray).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     fn any_avx2_impl<K: TriangleKernel, C: Count, const S: usize, const P: bool>(
@@ -1255,7 +1316,8 @@ impl WideBvh {
     }
 
     /// The AVX2 any-hit walk of the subtree under node `start` alone (the
-    /// packet walk's switch to single rays when few of its rays are left).
+    /// packet walk's switch to single rays when few of its rays are left;
+    /// the contract of [`Self::closest_avx2_from`]).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     pub(super) fn any_avx2_from<K: TriangleKernel, const S: usize, const P: bool>(
@@ -1267,64 +1329,115 @@ impl WideBvh {
     }
 }
 
-/// The portable closest-hit entry point.
+/// The portable closest-hit entry point (the ray is traceable: [`ClosestFn`]).
 unsafe fn closest_portable<K: TriangleKernel, const S: usize>(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
     if bvh.nodes.is_empty() {
         return None;
     }
-    bvh.closest_portable_impl::<K, (), S>(ray, &mut ())
+    // SAFETY: the caller guarantees a traceable ray.
+    unsafe { bvh.closest_portable_impl::<K, (), S>(ray, &mut ()) }
 }
 
-/// The portable any-hit entry point.
+/// The portable any-hit entry point (the ray is traceable: [`AnyFn`]).
 unsafe fn any_portable<K: TriangleKernel, const S: usize>(bvh: &WideBvh, ray: &Ray) -> bool {
     if bvh.nodes.is_empty() {
         return false;
     }
-    bvh.any_portable_impl::<K, (), S>(ray, &mut ())
+    // SAFETY: the caller guarantees a traceable ray.
+    unsafe { bvh.any_portable_impl::<K, (), S>(ray, &mut ()) }
 }
 
-/// The AVX2 closest-hit entry point (only called when the CPU has AVX2).
+/// The AVX2 closest-hit entry point (only called when the CPU has AVX2, with a traceable ray).
 #[cfg(target_arch = "x86_64")]
 unsafe fn closest_avx2<K: TriangleKernel, const S: usize, const P: bool>(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
     if bvh.nodes.is_empty() {
         return None;
     }
-    // SAFETY: the caller guarantees AVX2 (`WideBvh::kernels`).
+    // SAFETY: the caller guarantees AVX2 (`WideBvh::kernels`) and a traceable ray.
     unsafe { bvh.closest_avx2_impl::<K, (), S, P>(ray, &mut ()) }
 }
 
 /// The AVX-512 closest-hit entry point (only called when the CPU has AVX2,
-/// AVX-512F and AVX-512VL).
+/// AVX-512F and AVX-512VL, with a traceable ray).
 #[cfg(target_arch = "x86_64")]
 unsafe fn closest_avx512<K: TriangleKernel, const S: usize, const P: bool>(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
     if bvh.nodes.is_empty() {
         return None;
     }
-    // SAFETY: the caller guarantees AVX2, AVX-512F and AVX-512VL (`WideBvh::kernels`).
+    // SAFETY: the caller guarantees AVX2, AVX-512F and AVX-512VL (`WideBvh::kernels`) and a traceable ray.
     unsafe { bvh.closest_avx512_impl::<K, (), S, P>(ray, &mut ()) }
 }
 
-/// The AVX2 any-hit entry point (only called when the CPU has AVX2).
+/// The AVX2 any-hit entry point (only called when the CPU has AVX2, with a traceable ray).
 #[cfg(target_arch = "x86_64")]
 unsafe fn any_avx2<K: TriangleKernel, const S: usize, const P: bool>(bvh: &WideBvh, ray: &Ray) -> bool {
     if bvh.nodes.is_empty() {
         return false;
     }
-    // SAFETY: the caller guarantees AVX2 (`WideBvh::kernels`).
+    // SAFETY: the caller guarantees AVX2 (`WideBvh::kernels`) and a traceable ray.
     unsafe { bvh.any_avx2_impl::<K, (), S, P>(ray, &mut ()) }
 }
 
 /// The portable packet entry point: each ray through the single-ray kernel.
 unsafe fn one_by_one_closest<K: TriangleKernel>(bvh: &WideBvh, rays: &[Ray], out: &mut [Option<Hit>]) {
     for (r, o) in rays.iter().zip(out) {
-        *o = bvh.closest_portable_impl::<K, (), STACK>(r, &mut ());
+        // SAFETY: the batch entries pass traceable rays only.
+        *o = unsafe { bvh.closest_portable_impl::<K, (), STACK>(r, &mut ()) };
     }
 }
 
 /// The portable any-hit packet entry point.
 unsafe fn one_by_one_any<K: TriangleKernel>(bvh: &WideBvh, rays: &[Ray], out: &mut [bool]) {
     for (r, o) in rays.iter().zip(out) {
-        *o = bvh.any_portable_impl::<K, (), STACK>(r, &mut ());
+        // SAFETY: as in `one_by_one_closest`.
+        *o = unsafe { bvh.any_portable_impl::<K, (), STACK>(r, &mut ()) };
+    }
+}
+
+/// The packets of the triangle leaf of `count` triangles from packet
+/// `first` of `pk`, a lane of a node of the tree `pk` belongs to.
+///
+/// Without a bounds check: [`check_links`] bounded every leaf lane's packets
+/// when the tree was built, and the tree's fields cannot change after.
+#[inline(always)]
+fn leaf_packets(pk: &TriPackets, first: u32, count: u32) -> &[Tri4] {
+    let (a, b) = (first as usize, first as usize + packets_for(count));
+    debug_assert!(a <= b && b <= pk.packets.len(), "packets {a}..{b} of {}", pk.packets.len());
+    // SAFETY: `first` and `count` come from a leaf lane of the tree (the
+    // callers' contract), whose range `check_links` bounded.
+    unsafe { pk.packets.get_unchecked(a..b) }
+}
+
+/// Check, once per tree, the links the walks follow without bounds checks
+/// ([`WideBvh::finish`]); panics (a builder's bug) when one is out of range:
+/// - every inner lane (count 0, child not `u32::MAX`) names a node of `nodes`;
+/// - every packet leaf lane's packets `child .. child + packets_for(count)`
+///   lie in `packets`;
+/// - every empty lane (child `u32::MAX`) has the inverted box `min = +inf`,
+///   `max = -inf`. A ray with a finite origin and direction then never enters
+///   it: on each axis the slab of the near row (`+inf` or `-inf` by the sign
+///   of the reciprocal direction, itself nonzero, finite or infinite, never
+///   NaN) gives the entry distance `+inf` and the far row the exit `-inf`, so
+///   no NaN arises and the entry never lies at or before the exit (in the
+///   scalar and in the SIMD test alike). The walks take such rays only
+///   ([`Kernels::closest`], [`Kernels::any`], the batch entries).
+///
+/// Entry leaves ([`ENTRY_LEAF`]) keep checked indexing.
+fn check_links(nodes: &[WideNode], packets: Option<&TriPackets>) {
+    let npk = packets.map_or(0, |p| p.packets.len());
+    for (i, n) in nodes.iter().enumerate() {
+        for l in 0..WIDTH {
+            let (c, k) = (n.child[l], n.count[l]);
+            if c == u32::MAX && k == 0 {
+                let inverted = (0..3).all(|a| n.b[a][l] == f32::INFINITY && n.b[3 + a][l] == f32::NEG_INFINITY);
+                assert!(inverted, "wide node {i} lane {l}: an empty lane without the inverted box");
+            } else if k == 0 {
+                assert!((c as usize) < nodes.len(), "wide node {i} lane {l}: child {c} of {} nodes", nodes.len());
+            } else if k & ENTRY_LEAF == 0 {
+                let end = c as usize + packets_for(k);
+                assert!(end <= npk, "wide node {i} lane {l}: packets {c}..{end} of {npk}");
+            }
+        }
     }
 }
 
@@ -1457,6 +1570,93 @@ mod tests {
             })
             .collect();
         Primitives { triangles, spheres: Vec::new() }
+    }
+
+    /// `check_links` accepts the trees the builders make and refuses a tree
+    /// with an inner lane past the nodes, a leaf's packets past the packets
+    /// or an empty lane without the inverted box (the walks follow those
+    /// links without bounds checks).
+    #[test]
+    fn links_out_of_range_are_refused() {
+        let prims = std::sync::Arc::new(soup(3000, 11));
+        let w = super::super::build_wide(&prims, &AccelConfig::default());
+        let (nodes, pk) = (w.nodes().to_vec(), w.packets().cloned());
+        check_links(&nodes, pk.as_ref());
+        let lanes = |f: fn(&WideNode, usize) -> bool| {
+            nodes.iter().enumerate().find_map(|(i, n)| (0..WIDTH).find(|&l| f(n, l)).map(|l| (i, l))).unwrap()
+        };
+        let refused = |nodes: Vec<WideNode>| {
+            let pk = pk.clone();
+            std::panic::catch_unwind(move || check_links(&nodes, pk.as_ref())).is_err()
+        };
+        let (i, l) = lanes(|n, l| n.count[l] == 0 && n.child[l] != u32::MAX);
+        let mut bad = nodes.clone();
+        bad[i].child[l] = nodes.len() as u32;
+        assert!(refused(bad), "an inner lane past the nodes");
+        let (i, l) = lanes(|n, l| n.count[l] > 0);
+        let mut bad = nodes.clone();
+        bad[i].child[l] = pk.as_ref().unwrap().packets.len() as u32;
+        assert!(refused(bad), "a leaf past the packets");
+        let (i, l) = lanes(|n, l| n.child[l] == u32::MAX);
+        let mut bad = nodes.clone();
+        bad[i].b[3][l] = 1.0;
+        assert!(refused(bad), "an empty lane with a box");
+    }
+
+    /// Rays that are not traceable (a NaN or infinite origin or direction, a
+    /// zero direction, an empty interval) get no hit from every entry point,
+    /// so the walks never see them; traceable rays along every axis in both
+    /// directions (reciprocals of +0 and -0 included) give the brute-force
+    /// answers.
+    #[test]
+    fn untraceable_rays_never_reach_the_walks() {
+        let prims = std::sync::Arc::new(soup(2000, 12));
+        let w = super::super::build_wide(&prims, &AccelConfig::default());
+        let nan = f32::NAN;
+        let bad = [
+            Ray::new(Vec3::new(nan, nan, nan), Vec3::X),
+            Ray::new(Vec3::splat(0.5), Vec3::new(nan, 0.0, 0.0)),
+            Ray::new(Vec3::new(f32::INFINITY, 0.5, 0.5), -Vec3::X),
+            Ray::new(Vec3::splat(0.5), Vec3::ZERO),
+            Ray { t_min: 1.0, t_max: 0.5, ..Ray::new(Vec3::splat(-1.0), Vec3::ONE) },
+        ];
+        for isa in WalkIsa::supported() {
+            let mut w = w.clone();
+            w.set_isa(isa);
+            for test in [TriangleTest::Watertight, TriangleTest::MollerTrumbore] {
+                let k = w.kernels(test);
+                for r in &bad {
+                    assert!(k.closest(&w, r).is_none() && !k.any(&w, r), "{isa:?} {r:?}");
+                    assert!(w.intersect(r, test).is_none() && !w.occluded(r, test), "{isa:?} {r:?}");
+                    let mut c = TraversalCounts::default();
+                    assert!(w.intersect_counted(r, test, &mut c).is_none(), "{isa:?} {r:?}");
+                    assert!(!w.occluded_counted(r, test, &mut c), "{isa:?} {r:?}");
+                    assert_eq!(c.nodes, 0, "{isa:?}: an untraceable ray visited a node");
+                }
+                let brute = crate::accel::BruteForce::new(prims.clone(), test);
+                for axis in [Vec3::X, Vec3::Y, Vec3::Z] {
+                    for d in [axis, -axis] {
+                        for k in 0..50 {
+                            let o = Vec3::splat(0.02 * k as f32) - d;
+                            let r = Ray::new(o, d);
+                            assert_eq!(
+                                k_hit(&k_closest(&w, test, &r)),
+                                k_hit(&crate::accel::Tracer::intersect(&brute, &r)),
+                                "{isa:?} {r:?}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    fn k_closest(w: &WideBvh, test: TriangleTest, r: &Ray) -> Option<Hit> {
+        w.kernels(test).closest(w, r)
+    }
+
+    fn k_hit(h: &Option<Hit>) -> Option<(u32, u32)> {
+        h.map(|h| (h.prim, h.t.to_bits()))
     }
 
     /// The deep-tree stack (chosen for trees of more than 27 levels) gives

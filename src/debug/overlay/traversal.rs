@@ -106,7 +106,7 @@ impl Overlay for TraversalPath {
         let hit = bvh.intersect_with(&ray, &mut log);
         let boxes = match (bvh.binary(), bvh.wide()) {
             (Some(b), _) => visited_binary(b, &log),
-            (None, Some(w)) => visited_wide(&w.nodes, &log),
+            (None, Some(w)) => visited_wide(w.nodes(), &log),
             (None, None) => Vec::new(),
         };
         let mut lines = Lines::default();
