@@ -618,7 +618,7 @@ macro_rules! any_hit {
 /// A closest-hit entry point of one configuration. Unsafe to call: the
 /// CPU must run its instruction set and the ray must be [`Ray::is_traceable`]
 /// (the walks follow the tree's links without bounds checks, see
-/// [`check_links`]); [`Kernels`] checks both.
+/// `check_links` in `wide.rs`); [`Kernels`] checks both.
 pub type ClosestFn = unsafe fn(&WideBvh, &Ray) -> Option<Hit>;
 /// An any-hit entry point of one configuration (the contract of [`ClosestFn`]).
 pub type AnyFn = unsafe fn(&WideBvh, &Ray) -> bool;
@@ -648,7 +648,7 @@ impl std::fmt::Debug for Kernels {
 impl Kernels {
     /// Closest hit of `ray` in `bvh`, which must be the tree these kernels were chosen for;
     /// none for a ray that is not [`Ray::is_traceable`] (the walks take
-    /// traceable rays only: see [`check_links`]).
+    /// traceable rays only: see `check_links` in `wide.rs`).
     #[inline(always)]
     pub fn closest(&self, bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
         if !ray.is_traceable() {
