@@ -449,7 +449,8 @@ macro_rules! closest {
                 if cur.count & ENTRY_LEAF != 0 {
                     $self.prims.intersect_leaf::<$k>(cur.child, n, &mut r, &lr.wr(), &mut best)
                 } else {
-                    $self.packets_closest::<$k>(cur.child, n, &mut r, &lr, &mut best, $simd)
+                    // SAFETY: a packet leaf lane of one of this tree's nodes.
+                    unsafe { $self.packets_closest::<$k>(cur.child, n, &mut r, &lr, &mut best, $simd) }
                 }
             } {
                 $counts.closer();
@@ -569,7 +570,8 @@ macro_rules! any_hit {
                         Some((a, ca)) => {
                             $counts.leaf(a, ca);
                             $counts.leaf(b, count);
-                            if $self.two_leaves_any::<$k>((a, ca), (b, count), $ray, &lr, $simd) {
+                            // SAFETY: two packet leaf lanes of this tree's nodes, of one to four triangles each.
+                            if unsafe { $self.two_leaves_any::<$k>((a, ca), (b, count), $ray, &lr, $simd) } {
                                 return true;
                             }
                         }
@@ -580,7 +582,8 @@ macro_rules! any_hit {
                     let hit = if count & ENTRY_LEAF != 0 {
                         $self.prims.occluded_leaf::<$k>(node.child[l], n, $ray, &lr.wr())
                     } else {
-                        $self.packets_any::<$k>(node.child[l], n, $ray, &lr, $simd)
+                        // SAFETY: a packet leaf lane of this node.
+                        unsafe { $self.packets_any::<$k>(node.child[l], n, $ray, &lr, $simd) }
                     };
                     if hit {
                         return true;
@@ -596,7 +599,8 @@ macro_rules! any_hit {
             }
             if let Some((a, ca)) = held {
                 $counts.leaf(a, ca);
-                if $self.packets_any::<$k>(a, ca, $ray, &lr, $simd) {
+                // SAFETY: a packet leaf lane of this node.
+                if unsafe { $self.packets_any::<$k>(a, ca, $ray, &lr, $simd) } {
                     return true;
                 }
             }
@@ -1164,8 +1168,13 @@ impl WideBvh {
     /// Closest-hit test of the triangle leaf of `count` triangles from packet
     /// `first`: SSE packets (four triangles at once) when `simd`, the
     /// per-triangle loop otherwise (same results).
+    ///
+    /// # Safety
+    /// `first` and `count` are a packet leaf lane (`child`, `count` without
+    /// [`ENTRY_LEAF`]) of one of this tree's nodes (the SIMD form reads its
+    /// packets without bounds checks, see `leaf_packets`).
     #[inline(always)]
-    pub(super) fn packets_closest<K: TriangleKernel>(
+    pub(super) unsafe fn packets_closest<K: TriangleKernel>(
         &self,
         first: u32,
         count: u32,
@@ -1178,7 +1187,8 @@ impl WideBvh {
         let Some(pk) = &self.packets else { return false };
         #[cfg(target_arch = "x86_64")]
         if simd {
-            let pks = leaf_packets(pk, first, count);
+            // SAFETY: the caller's contract.
+            let pks = unsafe { leaf_packets(pk, first, count) };
             return match K::TEST {
                 TriangleTest::Watertight => TriPackets::intersect_leaf_simd(pks, ray, lr, best),
                 TriangleTest::MollerTrumbore => TriPackets::intersect_leaf_simd_mt(pks, ray, best),
@@ -1209,8 +1219,12 @@ impl WideBvh {
     ///
     /// `a` and `b` are `(first packet, triangle count)`; without `simd` (or
     /// off x86-64) the two leaves go through [`Self::packets_any`] in turn.
+    ///
+    /// # Safety
+    /// `a` and `b` are packet leaf lanes of this tree's nodes (as for
+    /// [`Self::packets_closest`]), each of one to four triangles.
     #[inline(always)]
-    pub(super) fn two_leaves_any<K: TriangleKernel>(
+    pub(super) unsafe fn two_leaves_any<K: TriangleKernel>(
         &self,
         a: (u32, u32),
         b: (u32, u32),
@@ -1221,19 +1235,24 @@ impl WideBvh {
         #[cfg(target_arch = "x86_64")]
         if simd && K::WATERTIGHT {
             let Some(pk) = &self.packets else { return false };
-            let (pa, pb) = (leaf_packets(pk, a.0, a.1), leaf_packets(pk, b.0, b.1));
+            // SAFETY: the caller's contract: two leaf lanes of one packet each
+            // (one to four triangles), so `pa` and `pb` are one long.
+            let (pa, pb) = unsafe { (leaf_packets(pk, a.0, a.1), leaf_packets(pk, b.0, b.1)) };
             debug_assert!(pa.len() == 1 && pb.len() == 1, "two leaves of one packet each");
-            // SAFETY: each leaf holds one to four triangles (the caller's
-            // condition), so one packet: `pa` and `pb` are one long.
+            // SAFETY: as above.
             let (pa, pb) = unsafe { (pa.get_unchecked(0), pb.get_unchecked(0)) };
             return TriPackets::occluded_two_leaves_simd(pa, pb, ray, lr);
         }
-        self.packets_any::<K>(a.0, a.1, ray, lr, simd) || self.packets_any::<K>(b.0, b.1, ray, lr, simd)
+        // SAFETY: the caller's contract.
+        unsafe { self.packets_any::<K>(a.0, a.1, ray, lr, simd) || self.packets_any::<K>(b.0, b.1, ray, lr, simd) }
     }
 
     /// Any-hit test of a triangle leaf (see [`Self::packets_closest`]).
+    ///
+    /// # Safety
+    /// As for [`Self::packets_closest`].
     #[inline(always)]
-    pub(super) fn packets_any<K: TriangleKernel>(
+    pub(super) unsafe fn packets_any<K: TriangleKernel>(
         &self,
         first: u32,
         count: u32,
@@ -1244,7 +1263,8 @@ impl WideBvh {
         let Some(pk) = &self.packets else { return false };
         #[cfg(target_arch = "x86_64")]
         if simd {
-            let pks = leaf_packets(pk, first, count);
+            // SAFETY: the caller's contract.
+            let pks = unsafe { leaf_packets(pk, first, count) };
             return match K::TEST {
                 TriangleTest::Watertight => TriPackets::occluded_leaf_simd(pks, ray, lr),
                 TriangleTest::MollerTrumbore => TriPackets::occluded_leaf_simd_mt(pks, ray),
@@ -1399,12 +1419,15 @@ unsafe fn one_by_one_any<K: TriangleKernel>(bvh: &WideBvh, rays: &[Ray], out: &m
 ///
 /// Without a bounds check: [`check_links`] bounded every leaf lane's packets
 /// when the tree was built, and the tree's fields cannot change after.
+///
+/// # Safety
+/// `first` and `count` are a packet leaf lane of a node of the tree whose
+/// packets `pk` are.
 #[inline(always)]
-fn leaf_packets(pk: &TriPackets, first: u32, count: u32) -> &[Tri4] {
+unsafe fn leaf_packets(pk: &TriPackets, first: u32, count: u32) -> &[Tri4] {
     let (a, b) = (first as usize, first as usize + packets_for(count));
     debug_assert!(a <= b && b <= pk.packets.len(), "packets {a}..{b} of {}", pk.packets.len());
-    // SAFETY: `first` and `count` come from a leaf lane of the tree (the
-    // callers' contract), whose range `check_links` bounded.
+    // SAFETY: the lane's range, which `check_links` bounded.
     unsafe { pk.packets.get_unchecked(a..b) }
 }
 

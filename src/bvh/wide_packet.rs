@@ -759,7 +759,8 @@ pub(super) unsafe fn closest8<K: TriangleKernel, const S: usize, const P: bool>(
                 let closer = if cur.count & ENTRY_LEAF != 0 {
                     bvh.prims.intersect_leaf::<K>(cur.child, c, &mut r[i], &w.wr(), &mut best[i])
                 } else {
-                    bvh.packets_closest::<K>(cur.child, c, &mut r[i], w, &mut best[i], true)
+                    // SAFETY: a packet leaf lane of one of the tree's nodes.
+                    unsafe { bvh.packets_closest::<K>(cur.child, c, &mut r[i], w, &mut best[i], true) }
                 };
                 if closer {
                     soa.cull[i] = cull_bound(r[i].t_max);
@@ -1037,7 +1038,8 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool>(
                 let hit = if count & ENTRY_LEAF != 0 {
                     bvh.prims.occluded_leaf::<K>(node.child[l], c, r, &w.wr())
                 } else {
-                    bvh.packets_any::<K>(node.child[l], c, r, w, true)
+                    // SAFETY: a packet leaf lane of this node.
+                    unsafe { bvh.packets_any::<K>(node.child[l], c, r, w, true) }
                 };
                 if hit {
                     open &= !(1 << i);
