@@ -683,7 +683,8 @@ impl Kernels {
         for (r, o) in rays.chunks(super::wide_packet::PACKET).zip(out.chunks_mut(super::wide_packet::PACKET)) {
             if r.len() < super::wide_packet::MIN_PACKET || !r.iter().all(Ray::is_traceable) {
                 for (r, o) in r.iter().zip(o) {
-                    *o = if r.is_traceable() { self.closest(bvh, r) } else { None };
+                    // (None for a ray that is not traceable.)
+                    *o = self.closest(bvh, r);
                 }
             } else {
                 // SAFETY: as in `closest`; the tree is not empty and each chunk holds 1 to 8 rays.
@@ -702,7 +703,7 @@ impl Kernels {
         for (r, o) in rays.chunks(super::wide_packet::PACKET).zip(out.chunks_mut(super::wide_packet::PACKET)) {
             if r.len() < super::wide_packet::MIN_PACKET || !r.iter().all(Ray::is_traceable) {
                 for (r, o) in r.iter().zip(o) {
-                    *o = r.is_traceable() && self.any(bvh, r);
+                    *o = self.any(bvh, r);
                 }
             } else {
                 // SAFETY: as in `closest_batch`.
