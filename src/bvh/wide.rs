@@ -1657,6 +1657,20 @@ mod tests {
                     assert!(!w.occluded_counted(r, test, &mut c), "{isa:?} {r:?}");
                     assert_eq!(c.nodes, 0, "{isa:?}: an untraceable ray visited a node");
                 }
+                // In batches (full packets and a short one) beside traceable rays.
+                let good = Ray::new(Vec3::new(-1.0, 0.5, 0.5), Vec3::X);
+                for n in [3, 8, 16] {
+                    let rays: Vec<Ray> =
+                        (0..n).map(|i| if i % 2 == 0 { bad[i / 2 % bad.len()] } else { good }).collect();
+                    let (mut hits, mut occl) = (vec![None; n], vec![true; n]);
+                    k.closest_batch(&w, &rays, &mut hits);
+                    k.any_batch(&w, &rays, &mut occl);
+                    for (i, r) in rays.iter().enumerate() {
+                        let (h, o) = if i % 2 == 0 { (None, false) } else { (k.closest(&w, r), k.any(&w, r)) };
+                        assert_eq!(k_hit(&hits[i]), k_hit(&h), "{isa:?} batch of {n}, ray {i}");
+                        assert_eq!(occl[i], o, "{isa:?} batch of {n}, ray {i}");
+                    }
+                }
                 let brute = crate::accel::BruteForce::new(prims.clone(), test);
                 for axis in [Vec3::X, Vec3::Y, Vec3::Z] {
                     for d in [axis, -axis] {
