@@ -11,7 +11,9 @@
 //! (N rays, traced REPEAT times when a fifth argument is given), `build-cold` (N
 //! builds, each timed after builds by the other tracer, Embree on a device
 //! with the pool's thread count as in the race; `--features embree`; the
-//! median is printed), or `build` (N builds, counted by `--toggle-collect=call_path::build_all`), and TRACER one of `native`, `native-mt` (the Moller-Trumbore test), `embree`, `embree-default` (MEDIUM quality).
+//! median is printed), or `build` (N builds, each timed by the wall clock on the global pool, whose size
+//! `RAYON_NUM_THREADS` sets, with the median and quartiles printed; counted by
+//! `--toggle-collect=call_path::build_all`), and TRACER one of `native`, `native-mt` (the Moller-Trumbore test), `embree`, `embree-default` (MEDIUM quality).
 
 use std::path::Path;
 
@@ -131,8 +133,17 @@ fn main() -> rtdiff::Result<()> {
         return Ok(());
     }
     if set == "build" {
-        build_all(&prims, &cfg, n)?;
-        println!("{mesh} build: {n} builds");
+        // Each build timed on its own (wall clock, on the global pool:
+        // `RAYON_NUM_THREADS` sets its size); the median is printed.
+        let mut ms = Vec::with_capacity(n);
+        for _ in 0..n {
+            let start = std::time::Instant::now();
+            build_all(&prims, &cfg, 1)?;
+            ms.push(start.elapsed().as_secs_f64() * 1e3);
+        }
+        ms.sort_by(f64::total_cmp);
+        let q = |f: f64| ms.get(((ms.len() - 1) as f64 * f).round() as usize).copied().unwrap_or(f64::NAN);
+        println!("{mesh} build: {n} builds, median {:.3} ms (quartiles {:.3}-{:.3})", q(0.5), q(0.25), q(0.75));
         return Ok(());
     }
     let reference = build_tracer(prims.clone(), &native)?;
