@@ -380,6 +380,12 @@ fn count_flags_have_limits_named_in_errors_and_help() {
     let (code, err) = rtdiff_cmd(&["bench", s, "--rtdiff-isa", "avx2"]);
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("--rtdiff-isa applies to --race only"), "{err}");
+    let (code, err) = rtdiff_cmd(&["bench", s, "--build-repeats", "2"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("--build-repeats applies to --race only"), "{err}");
+    let (code, err) = rtdiff_cmd(&["bench", s, "--race", "1", "--build-repeats", "0"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("0 is not in 1..=100"), "{err}");
     let (code, err) = rtdiff_cmd(&["bench", s, "--race", "1", "--rtdiff-isa", "sse9"]);
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("'sse9'") && err.contains("avx512, avx2, portable"), "{err}");

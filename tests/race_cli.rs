@@ -35,10 +35,34 @@ fn the_race_runs_and_reports_the_walks_instruction_set() {
         let mesh = &report["meshes"][0];
         assert_eq!(mesh["rtdiff_isa"], isa.summary(), "{extra:?}");
         assert_eq!(mesh["rtdiff_isa_set"], !extra.is_empty(), "{extra:?}");
-        // Every contest ran, once (one round).
+        // Every ray contest ran once (one round), every build contest
+        // three times (the default builds per round).
         let contests = mesh["contests"].as_array().unwrap();
         assert!(contests.iter().any(|c| c["name"] == "incoherent"), "{extra:?}");
-        assert!(contests.iter().all(|c| c["times"].as_array().unwrap().len() == 1), "{extra:?}");
+        assert_eq!(mesh["build_repeats"], 3, "{extra:?}");
+        for c in contests {
+            let samples = if c["name"] == "build" { 3 } else { 1 };
+            assert_eq!(c["times"].as_array().unwrap().len(), samples, "{extra:?}: {}", c["name"]);
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `--build-repeats N` times each contestant's build N times per round, each
+/// a sample of the build contests, and says so in the mesh's heading.
+#[test]
+fn builds_repeat_within_a_round() {
+    let dir = std::env::temp_dir().join(format!("rtdiff-race-repeats-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (text, report) = race(&dir, &["--build-repeats", "2"]);
+    assert!(text.contains("1 interleaved rounds (2 builds of each per round)"), "{text}");
+    let mesh = &report["meshes"][0];
+    assert_eq!(mesh["build_repeats"], 2);
+    let builds: Vec<_> = mesh["contests"].as_array().unwrap().iter().filter(|c| c["name"] == "build").collect();
+    assert_eq!(builds.len(), 4, "one build contest per Embree mode");
+    for c in builds {
+        assert_eq!(c["times"].as_array().unwrap().len(), 2, "{}", c["opponent"]);
+        assert_eq!(c["walls"].as_array().unwrap().len(), 2, "{}", c["opponent"]);
     }
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -51,6 +51,10 @@ pub struct BenchArgs {
     /// dragon_full from assets/.
     #[arg(long, value_name = "ROUNDS", value_parser = limits::ranged::<usize>(1, limits::MAX_RUNS as u64))]
     pub race: Option<usize>,
+    /// Builds of each contestant per race round, interleaved, each a sample
+    /// of the build contests (1 to 100; default 3).
+    #[arg(long, value_parser = limits::ranged::<usize>(1, 100))]
+    pub build_repeats: Option<usize>,
     /// Thread counts of the race (comma-separated, 1 to 1024 each).
     #[arg(long, value_delimiter = ',', default_value = "1,2", value_parser = limits::ranged::<usize>(1, limits::MAX_THREADS as u64))]
     pub threads: Vec<usize>,
@@ -124,6 +128,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if args.rtdiff_isa.is_some() {
         return Err(Error::Invalid("--rtdiff-isa applies to --race only".into()));
     }
+    if args.build_repeats.is_some() {
+        return Err(Error::Invalid("--build-repeats applies to --race only".into()));
+    }
     let scenes =
         if args.scenes.is_empty() { default_meshes(&["dragon_87k", "dragon_full"]) } else { args.scenes.clone() };
     for s in &scenes {
@@ -162,6 +169,7 @@ fn race(args: &BenchArgs, rounds: usize) -> Result<()> {
         };
         let ropts = RaceOptions {
             rounds,
+            build_repeats: args.build_repeats.unwrap_or(3),
             threads: args.threads.clone(),
             batches: true,
             triangle_test: args.triangle_test,
@@ -262,8 +270,8 @@ pub fn print_bench(r: &BenchReport) {
 /// Print one mesh's race: one line per thread count, workload and Embree mode.
 pub fn print_mesh_race(m: &MeshRace, rounds: usize) {
     println!(
-        "\n## {} ({} primitives; rtdiff tree {:.1} bytes per primitive): rtdiff {} against Embree, {rounds} interleaved rounds",
-        m.mesh, m.primitives, m.rtdiff_bytes_per_primitive, m.rtdiff
+        "\n## {} ({} primitives; rtdiff tree {:.1} bytes per primitive): rtdiff {} against Embree, {rounds} interleaved rounds ({} builds of each per round)",
+        m.mesh, m.primitives, m.rtdiff_bytes_per_primitive, m.rtdiff, m.build_repeats
     );
     println!(
         "instruction sets: rtdiff {}{}, Embree {}{}",

@@ -105,6 +105,8 @@ pub struct MeshRace {
     pub mesh: String,
     /// Primitives in it.
     pub primitives: usize,
+    /// Builds of each contestant per round ([`RaceOptions::build_repeats`]).
+    pub build_repeats: usize,
     /// rtdiff's tracer (`Tracer::name`: `bvh-sah/fast`, with ` mt` for the Moller-Trumbore test).
     pub rtdiff: String,
     /// rtdiff's triangle test ([`RaceOptions::triangle_test`]).
@@ -170,6 +172,13 @@ impl MeshRace {
 pub struct RaceOptions {
     /// Interleaved rounds.
     pub rounds: usize,
+    /// Builds of each contestant per round, interleaved (each a sample of
+    /// the build contests). A round's builds take a fraction of its time, and
+    /// on a shared two-core machine a build's time swings by 10-40% from
+    /// one to the next (the other core taken, memory pages dropped by the
+    /// system and faulted back in): with three builds per round, a race of
+    /// seven rounds takes its build medians over 21 samples instead of 7.
+    pub build_repeats: usize,
     /// Thread counts, each raced separately (1: CPU time; more: wall clock).
     pub threads: Vec<usize>,
     /// Also race the batch calls (`intersect_batch` / `occluded_batch`).
@@ -428,29 +437,34 @@ pub fn race_mesh(
         for round in 0..opts.rounds {
             // Builds: rtdiff's sah + 8-wide collapse + packets on the pool,
             // each Embree mode on the device; construction only.
-            let (mut ours_t, mut ours_w) = (0.0, 0.0);
-            let (mut theirs_t, mut theirs_w) = (vec![0.0; m], vec![0.0; m]);
-            for k in run_order(m + 1, round, 0) {
-                if k == m {
-                    let (t, w, r) = pool.install(|| {
-                        let mut b = || build_ours(prims.clone()).map(|_| 0);
-                        time_result(threads, &clock, &mut b)
-                    });
-                    r?;
-                    (ours_t, ours_w) = (t, w);
-                } else {
-                    let (q, md) = EMBREE_MODES[k];
-                    let (t, w, r) = pool.install(|| {
-                        let mut b = || EmbreeTracer::with_mode(&device, prims.clone(), q, md).map(|_| 0);
-                        time_result(threads, &clock, &mut b)
-                    });
-                    r?;
-                    (theirs_t[k], theirs_w[k]) = (t, w);
+            for rep in 0..opts.build_repeats.max(1) {
+                let (mut ours_t, mut ours_w) = (0.0, 0.0);
+                let (mut theirs_t, mut theirs_w) = (vec![0.0; m], vec![0.0; m]);
+                // A fresh order for each repetition (the first as before).
+                let order =
+                    if rep == 0 { run_order(m + 1, round, 0) } else { run_order(m + 1, round, usize::MAX - rep) };
+                for k in order {
+                    if k == m {
+                        let (t, w, r) = pool.install(|| {
+                            let mut b = || build_ours(prims.clone()).map(|_| 0);
+                            time_result(threads, &clock, &mut b)
+                        });
+                        r?;
+                        (ours_t, ours_w) = (t, w);
+                    } else {
+                        let (q, md) = EMBREE_MODES[k];
+                        let (t, w, r) = pool.install(|| {
+                            let mut b = || EmbreeTracer::with_mode(&device, prims.clone(), q, md).map(|_| 0);
+                            time_result(threads, &clock, &mut b)
+                        });
+                        r?;
+                        (theirs_t[k], theirs_w[k]) = (t, w);
+                    }
                 }
-            }
-            for k in 0..m {
-                contests[first + k].times.push((ours_t, theirs_t[k]));
-                contests[first + k].walls.push((ours_w, theirs_w[k]));
+                for k in 0..m {
+                    contests[first + k].times.push((ours_t, theirs_t[k]));
+                    contests[first + k].walls.push((ours_w, theirs_w[k]));
+                }
             }
             for (w, (wname, rays, any, batch)) in loads.iter().enumerate() {
                 let (mut ta, mut tb, mut ha, mut hb) = (0.0, vec![0.0; m], 0, vec![0; m]);
@@ -484,6 +498,7 @@ pub fn race_mesh(
     Ok(MeshRace {
         mesh: mesh.to_string(),
         primitives: prims.len(),
+        build_repeats: opts.build_repeats.max(1),
         rtdiff,
         triangle_test: opts.triangle_test,
         rtdiff_bytes_per_primitive: bytes,
