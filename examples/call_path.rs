@@ -11,8 +11,8 @@
 //! (N rays, traced REPEAT times when a fifth argument is given), `build-cold` (N
 //! builds, each timed after builds by the other tracer, Embree on a device
 //! with the pool's thread count as in the race; `--features embree`; the
-//! median is printed), or `build` (N builds, each timed by the wall clock on the global pool, whose size
-//! `RAYON_NUM_THREADS` sets, with the median and quartiles printed; counted by
+//! median is printed), or `build` (N builds, each called from a pool of `RAYON_NUM_THREADS` threads and
+//! timed by the wall clock, with the median and quartiles printed; counted by
 //! `--toggle-collect=call_path::build_all`), and TRACER one of `native`, `native-mt` (the Moller-Trumbore test), `embree`, `embree-default` (MEDIUM quality).
 
 use std::path::Path;
@@ -133,17 +133,51 @@ fn main() -> rtdiff::Result<()> {
         return Ok(());
     }
     if set == "build" {
-        // Each build timed on its own (wall clock, on the global pool:
-        // `RAYON_NUM_THREADS` sets its size); the median is printed.
+        // Each build timed on its own (wall clock), called from a thread of
+        // a pool of `RAYON_NUM_THREADS` threads, as `rtdiff bench --race`
+        // calls it; the median is printed. Embree builds on one device of
+        // the pool's thread count, made before the first build (as in the
+        // race); rtdiff's through `build_tracer`.
+        let pool = rayon::ThreadPoolBuilder::new()
+            .build()
+            .map_err(|e| rtdiff::Error::Invalid(format!("cannot start the thread pool: {e}")))?;
+        #[cfg(feature = "embree")]
+        let device = rtdiff::embree::Device::new(&format!("threads={}", pool.current_num_threads()))?;
+        let one_build = || -> rtdiff::Result<()> {
+            if cfg.backend == Backend::Native {
+                return build_all(&prims, &cfg, 1);
+            }
+            #[cfg(feature = "embree")]
+            {
+                let t = rtdiff::embree::EmbreeTracer::with_mode(
+                    &device,
+                    prims.clone(),
+                    cfg.embree_quality,
+                    cfg.embree_mode,
+                );
+                std::hint::black_box(t?);
+                Ok(())
+            }
+            #[cfg(not(feature = "embree"))]
+            Err(rtdiff::Error::Invalid("Embree builds need --features embree".into()))
+        };
         let mut ms = Vec::with_capacity(n);
         for _ in 0..n {
-            let start = std::time::Instant::now();
-            build_all(&prims, &cfg, 1)?;
-            ms.push(start.elapsed().as_secs_f64() * 1e3);
+            // Timed on the pool's thread, without the handoff to it.
+            ms.push(pool.install(|| {
+                let start = std::time::Instant::now();
+                one_build().map(|()| start.elapsed().as_secs_f64() * 1e3)
+            })?);
         }
         ms.sort_by(f64::total_cmp);
         let q = |f: f64| ms.get(((ms.len() - 1) as f64 * f).round() as usize).copied().unwrap_or(f64::NAN);
-        println!("{mesh} build: {n} builds, median {:.3} ms (quartiles {:.3}-{:.3})", q(0.5), q(0.25), q(0.75));
+        println!(
+            "{mesh} build {which}: {n} builds on {} threads, median {:.3} ms (quartiles {:.3}-{:.3})",
+            pool.current_num_threads(),
+            q(0.5),
+            q(0.25),
+            q(0.75)
+        );
         return Ok(());
     }
     let reference = build_tracer(prims.clone(), &native)?;
