@@ -169,7 +169,7 @@ fn race(args: &BenchArgs, rounds: usize) -> Result<()> {
         };
         let ropts = RaceOptions {
             rounds,
-            build_repeats: args.build_repeats.unwrap_or(3),
+            build_repeats: args.build_repeats.unwrap_or(crate::perf::race::DEFAULT_BUILD_REPEATS),
             threads: args.threads.clone(),
             batches: true,
             triangle_test: args.triangle_test,

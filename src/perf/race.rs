@@ -98,6 +98,10 @@ impl Contest {
     }
 }
 
+/// Builds of each contestant per round when `--build-repeats` is not given
+/// ([`RaceOptions::build_repeats`]).
+pub const DEFAULT_BUILD_REPEATS: usize = 3;
+
 /// Everything the race measured on one mesh.
 #[derive(Clone, Debug, Serialize)]
 pub struct MeshRace {
@@ -354,6 +358,7 @@ pub fn race_mesh(
         }
     };
     let loads = workloads(sets, opts.batches);
+    let build_repeats = opts.build_repeats.max(1);
     let mut contests = Vec::new();
     let mut hit_count_differences = Vec::new();
     let mut bytes = 0.0;
@@ -437,7 +442,7 @@ pub fn race_mesh(
         for round in 0..opts.rounds {
             // Builds: rtdiff's sah + 8-wide collapse + packets on the pool,
             // each Embree mode on the device; construction only.
-            for rep in 0..opts.build_repeats.max(1) {
+            for rep in 0..build_repeats {
                 let (mut ours_t, mut ours_w) = (0.0, 0.0);
                 let (mut theirs_t, mut theirs_w) = (vec![0.0; m], vec![0.0; m]);
                 // A fresh order for each repetition (the first as before).
@@ -498,7 +503,7 @@ pub fn race_mesh(
     Ok(MeshRace {
         mesh: mesh.to_string(),
         primitives: prims.len(),
-        build_repeats: opts.build_repeats.max(1),
+        build_repeats,
         rtdiff,
         triangle_test: opts.triangle_test,
         rtdiff_bytes_per_primitive: bytes,
