@@ -214,9 +214,10 @@ struct Avx2Pre {
     neg_inv: [std::arch::x86_64::__m256; 3],
     neg_inv_far: [std::arch::x86_64::__m256; 3],
     t_min: std::arch::x86_64::__m256,
-    /// Byte offsets of the near and far rows of each axis in a node.
+    /// Byte offsets of the near rows of each axis in a node; the far row of
+    /// axis `a` is the other of rows `a` and `a + 3`, at byte offset
+    /// `(2 a + 3) * 32 - near[a]` (one register per axis instead of two).
     near: [usize; 3],
-    far: [usize; 3],
 }
 
 /// Broadcast `p` into the AVX2 box test's registers (a macro so it expands
@@ -234,7 +235,6 @@ macro_rules! avx2_pre {
             neg_inv_far: b(-p.inv_far),
             t_min: _mm256_set1_ps(p.t_min),
             near: p.near_row.map(|r| r * row),
-            far: p.far_row.map(|r| r * row),
         }
     }};
 }
@@ -268,9 +268,9 @@ macro_rules! box8_avx2 {
         let tn_x = _mm256_mul_ps(_mm256_sub_ps(q.o[0], ld(q.near[0])), q.neg_inv[0]);
         let tn_y = _mm256_mul_ps(_mm256_sub_ps(q.o[1], ld(q.near[1])), q.neg_inv[1]);
         let tn_z = _mm256_mul_ps(_mm256_sub_ps(q.o[2], ld(q.near[2])), q.neg_inv[2]);
-        let tf_x = _mm256_mul_ps(_mm256_sub_ps(q.o[0], ld(q.far[0])), q.neg_inv_far[0]);
-        let tf_y = _mm256_mul_ps(_mm256_sub_ps(q.o[1], ld(q.far[1])), q.neg_inv_far[1]);
-        let tf_z = _mm256_mul_ps(_mm256_sub_ps(q.o[2], ld(q.far[2])), q.neg_inv_far[2]);
+        let tf_x = _mm256_mul_ps(_mm256_sub_ps(q.o[0], ld(3 * 32 - q.near[0])), q.neg_inv_far[0]);
+        let tf_y = _mm256_mul_ps(_mm256_sub_ps(q.o[1], ld(5 * 32 - q.near[1])), q.neg_inv_far[1]);
+        let tf_z = _mm256_mul_ps(_mm256_sub_ps(q.o[2], ld(7 * 32 - q.near[2])), q.neg_inv_far[2]);
         let tn = _mm256_max_ps(_mm256_max_ps(tn_x, tn_y), _mm256_max_ps(tn_z, q.t_min));
         let tf = _mm256_min_ps(_mm256_min_ps(tf_x, tf_y), _mm256_min_ps(tf_z, _mm256_set1_ps($cull)));
         let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
