@@ -215,9 +215,22 @@ struct Avx2Pre {
     neg_inv_far: [std::arch::x86_64::__m256; 3],
     t_min: std::arch::x86_64::__m256,
     /// Byte offsets of the near rows of each axis in a node; the far row of
-    /// axis `a` is the other of rows `a` and `a + 3`, at byte offset
-    /// `(2 a + 3) * 32 - near[a]` (one register per axis instead of two).
+    /// axis `a` is the other of rows `a` and `a + 3`, at [`far_offset`]
+    /// (one register per axis instead of two).
     near: [usize; 3],
+}
+
+/// Bytes of one row of a [`WideNode`]'s boxes (one coordinate of the eight lanes).
+#[cfg(target_arch = "x86_64")]
+const ROW_BYTES: usize = std::mem::size_of::<[f32; WIDTH]>();
+
+/// Byte offset of axis `a`'s far row, given its near row's: rows `a` and
+/// `a + 3` hold the axis's two planes, so the two offsets add up to
+/// `(2 a + 3)` rows ([`WidePre::new`] picks one as near, the other as far).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+const fn far_offset(a: usize, near: usize) -> usize {
+    (2 * a + 3) * ROW_BYTES - near
 }
 
 /// Broadcast `p` into the AVX2 box test's registers (a macro so it expands
@@ -228,13 +241,13 @@ macro_rules! avx2_pre {
         use std::arch::x86_64::*;
         let p: &WidePre = $p;
         let b = |v: Vec3| [_mm256_set1_ps(v.x), _mm256_set1_ps(v.y), _mm256_set1_ps(v.z)];
-        let row = std::mem::size_of::<[f32; WIDTH]>();
+        debug_assert!((0..3).all(|a| far_offset(a, p.near_row[a] * ROW_BYTES) == p.far_row[a] * ROW_BYTES));
         Avx2Pre {
             o: b(p.o),
             neg_inv: b(-p.inv),
             neg_inv_far: b(-p.inv_far),
             t_min: _mm256_set1_ps(p.t_min),
-            near: p.near_row.map(|r| r * row),
+            near: p.near_row.map(|r| r * ROW_BYTES),
         }
     }};
 }
@@ -268,9 +281,9 @@ macro_rules! box8_avx2 {
         let tn_x = _mm256_mul_ps(_mm256_sub_ps(q.o[0], ld(q.near[0])), q.neg_inv[0]);
         let tn_y = _mm256_mul_ps(_mm256_sub_ps(q.o[1], ld(q.near[1])), q.neg_inv[1]);
         let tn_z = _mm256_mul_ps(_mm256_sub_ps(q.o[2], ld(q.near[2])), q.neg_inv[2]);
-        let tf_x = _mm256_mul_ps(_mm256_sub_ps(q.o[0], ld(3 * 32 - q.near[0])), q.neg_inv_far[0]);
-        let tf_y = _mm256_mul_ps(_mm256_sub_ps(q.o[1], ld(5 * 32 - q.near[1])), q.neg_inv_far[1]);
-        let tf_z = _mm256_mul_ps(_mm256_sub_ps(q.o[2], ld(7 * 32 - q.near[2])), q.neg_inv_far[2]);
+        let tf_x = _mm256_mul_ps(_mm256_sub_ps(q.o[0], ld(far_offset(0, q.near[0]))), q.neg_inv_far[0]);
+        let tf_y = _mm256_mul_ps(_mm256_sub_ps(q.o[1], ld(far_offset(1, q.near[1]))), q.neg_inv_far[1]);
+        let tf_z = _mm256_mul_ps(_mm256_sub_ps(q.o[2], ld(far_offset(2, q.near[2]))), q.neg_inv_far[2]);
         let tn = _mm256_max_ps(_mm256_max_ps(tn_x, tn_y), _mm256_max_ps(tn_z, q.t_min));
         let tf = _mm256_min_ps(_mm256_min_ps(tf_x, tf_y), _mm256_min_ps(tf_z, _mm256_set1_ps($cull)));
         let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tn, tf)) as u32;
