@@ -343,9 +343,9 @@ macro_rules! closest {
                 debug_assert!((cur.child as usize) < nodes.len(), "node {} of {}", cur.child, nodes.len());
                 // SAFETY: `cur` is the start node (a node, by the caller) or
                 // a lane the box test entered with count 0. Such a lane is an
-                // inner node, whose index `check_links` bounded when the tree
+                // inner node, whose index `check_node` bounded when the tree
                 // was built, or an empty lane, which no ray with a finite
-                // origin and direction enters (`check_links`), and the walks
+                // origin and direction enters (`check_node`), and the walks
                 // take no other (`Kernels::closest`).
                 let node = unsafe { nodes.get_unchecked(cur.child as usize) };
                 $counts.node(cur.child);
@@ -635,7 +635,7 @@ macro_rules! any_hit {
 /// A closest-hit entry point of one configuration. Unsafe to call: the
 /// CPU must run its instruction set and the ray must be [`Ray::is_traceable`]
 /// (the walks follow the tree's links without bounds checks, see
-/// `check_links` in `wide.rs`); [`Kernels`] checks both.
+/// `check_node` in `wide.rs`); [`Kernels`] checks both.
 pub type ClosestFn = unsafe fn(&WideBvh, &Ray) -> Option<Hit>;
 /// An any-hit entry point of one configuration (the contract of [`ClosestFn`]).
 pub type AnyFn = unsafe fn(&WideBvh, &Ray) -> bool;
@@ -665,7 +665,7 @@ impl std::fmt::Debug for Kernels {
 impl Kernels {
     /// Closest hit of `ray` in `bvh`, which must be the tree these kernels were chosen for;
     /// none for a ray that is not [`Ray::is_traceable`] (the walks take
-    /// traceable rays only: see `check_links` in `wide.rs`).
+    /// traceable rays only: see `check_node` in `wide.rs`).
     #[inline(always)]
     pub fn closest(&self, bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
         if !ray.is_traceable() {
@@ -804,7 +804,7 @@ impl WalkIsa {
 pub struct WideBvh {
     /// Nodes; node 0 is the root. Empty when there are no primitives.
     /// Private to the module tree: the walks follow its links without
-    /// bounds checks, which [`check_links`] made safe when the tree was built.
+    /// bounds checks, which [`check_node`] made safe when the tree was built.
     pub(super) nodes: Vec<WideNode>,
     /// Primitives of the [`ENTRY_LEAF`] leaves (those holding a sphere), in leaf order.
     pub(super) prims: LeafPrims,
@@ -837,16 +837,17 @@ pub const PREFETCH_ALL_BYTES: usize = 2 << 20;
 impl WideBvh {
     /// Collapse `bvh` into 8-wide nodes (see [`super::collapse`]).
     pub fn from_binary(bvh: BinaryBvh) -> Self {
-        let nodes = super::collapse::collapse(&bvh.nodes, super::packet::leaf_block(bvh.prims.entries.len()));
+        let (nodes, levels) = super::collapse::collapse(&bvh.nodes, super::packet::leaf_block(bvh.prims.entries.len()));
         let e = &bvh.prims.entries;
         let num_triangles = bvh.prims.num_triangles;
-        Self::assemble(nodes, num_triangles, bvh.prims.spheres.clone(), e.len(), |k| e[k].id, |k| e[k].v, |_| {})
+        let spheres = bvh.prims.spheres.clone();
+        Self::assemble((nodes, levels), num_triangles, spheres, e.len(), |k| e[k].id, |k| e[k].v, |_| {})
     }
 
     /// [`Self::from_binary`] for a tree whose primitives are not gathered yet:
     /// leaf triangles go straight from `prims` into packets.
     pub fn from_tree(prims: &Primitives, tree: &BuiltTree) -> Self {
-        let nodes = super::collapse::collapse(&tree.nodes, super::packet::leaf_block(prims.len()));
+        let collapsed = super::collapse::collapse(&tree.nodes, super::packet::leaf_block(prims.len()));
         let nt = prims.triangles.len() as u32;
         let vertices = |k: usize| {
             let id = tree.order[k] as usize;
@@ -863,14 +864,17 @@ impl WideBvh {
                 prefetch_span(std::ptr::from_ref(t).cast(), std::mem::size_of_val(t));
             }
         };
-        Self::assemble(nodes, nt, prims.spheres.clone(), tree.order.len(), |k| tree.order[k], vertices, touch)
+        Self::assemble(collapsed, nt, prims.spheres.clone(), tree.order.len(), |k| tree.order[k], vertices, touch)
     }
 
-    /// Point every leaf lane at its packets, or at its entries when it holds a sphere.
+    /// Point every leaf lane of the collapse's `(nodes, levels)` at its
+    /// packets, or at its entries when it holds a sphere, and check every
+    /// node's links as it is done ([`check_node`]: the only way to a
+    /// [`WideBvh`], so every tree the walks see was checked).
     /// `id(k)` and `v(k)` give leaf slot `k`'s primitive id and data (a [`crate::bvh::prims::LeafEntry`]'s `v`);
     /// `touch(k)` may prefetch what `v(k)` reads (it is called for a node's slots before they are read).
     fn assemble(
-        mut nodes: Vec<WideNode>,
+        (mut nodes, levels): (Vec<WideNode>, usize),
         num_triangles: u32,
         spheres: Vec<crate::geometry::Sphere>,
         slots: usize,
@@ -901,12 +905,13 @@ impl WideBvh {
         if all_triangles && rayon::current_num_threads() > 1 && npk >= 1 << 14 {
             pack_parallel(&mut nodes, &mut packets.packets, npk, &tri, &touch);
             let prims = LeafPrims { entries, num_triangles, spheres };
-            return Self::finish(nodes, prims, Some(packets));
+            return Self::finish(nodes, levels, prims, Some(packets));
         }
         if let Some(first) = nodes.first() {
             touch_leaves(first, &touch);
         }
-        for i in 0..nodes.len() {
+        let n_nodes = nodes.len();
+        for i in 0..n_nodes {
             // The next node's triangles are requested while this node's are
             // packed, so that their cache misses overlap the packing.
             if let Some(next) = nodes.get(i + 1) {
@@ -929,17 +934,22 @@ impl WideBvh {
                     );
                 }
             }
+            check_node(i, node, n_nodes, npk);
         }
+        // The checks above bounded the leaves' packets by the count made
+        // before packing: it must be the number packed.
+        assert_eq!(packets.packets.len(), npk, "packed other than the counted packets");
         let packets = (num_triangles > 0).then_some(packets);
         let prims = LeafPrims { entries, num_triangles, spheres };
-        Self::finish(nodes, prims, packets)
+        Self::finish(nodes, levels, prims, packets)
     }
 
-    /// The tree of `nodes` over `prims` and `packets`, with its depth, the
-    /// CPU's instruction set and the prefetch choice.
-    fn finish(nodes: Vec<WideNode>, prims: LeafPrims, packets: Option<TriPackets>) -> Self {
-        check_links(&nodes, packets.as_ref());
-        let mut bvh = Self { levels: levels(&nodes), nodes, prims, packets, isa: detect_isa(), prefetch_all: false };
+    /// The tree of `nodes` (checked, [`Self::assemble`]) over `prims` and
+    /// `packets`, with its depth `levels`, the CPU's instruction set and the
+    /// prefetch choice.
+    fn finish(nodes: Vec<WideNode>, levels: usize, prims: LeafPrims, packets: Option<TriPackets>) -> Self {
+        debug_assert_eq!(levels, levels_of(&nodes), "the collapse counted the levels wrong");
+        let mut bvh = Self { levels, nodes, prims, packets, isa: detect_isa(), prefetch_all: false };
         bvh.prefetch_all = bvh.bytes() > PREFETCH_ALL_BYTES;
         bvh
     }
@@ -1291,7 +1301,7 @@ impl WideBvh {
     /// The portable closest-hit walk.
     ///
     /// # Safety
-    /// `ray` must be [`Ray::is_traceable`] (see [`check_links`]), as for
+    /// `ray` must be [`Ray::is_traceable`] (see [`check_node`]), as for
     /// every walk below (the SIMD ones also need their instruction sets).
     #[inline(always)]
     unsafe fn closest_portable_impl<K: TriangleKernel, C: Count, const S: usize>(
@@ -1431,7 +1441,7 @@ unsafe fn one_by_one_any<K: TriangleKernel>(bvh: &WideBvh, rays: &[Ray], out: &m
 /// The packets of the triangle leaf of `count` triangles from packet
 /// `first` of `pk`, a lane of a node of the tree `pk` belongs to.
 ///
-/// Without a bounds check: [`check_links`] bounded every leaf lane's packets
+/// Without a bounds check: [`check_node`] bounded every leaf lane's packets
 /// when the tree was built, and the tree's fields cannot change after.
 ///
 /// # Safety
@@ -1441,12 +1451,16 @@ unsafe fn one_by_one_any<K: TriangleKernel>(bvh: &WideBvh, rays: &[Ray], out: &m
 unsafe fn leaf_packets(pk: &TriPackets, first: u32, count: u32) -> &[Tri4] {
     let (a, b) = (first as usize, first as usize + packets_for(count));
     debug_assert!(a <= b && b <= pk.packets.len(), "packets {a}..{b} of {}", pk.packets.len());
-    // SAFETY: the lane's range, which `check_links` bounded.
+    // SAFETY: the lane's range, which `check_node` bounded.
     unsafe { pk.packets.get_unchecked(a..b) }
 }
 
-/// Check, once per tree, the links the walks follow without bounds checks
-/// ([`WideBvh::finish`]); panics (a builder's bug) when one is out of range:
+/// Check the links of wide node `i` of `n_nodes` (over `npk` packets) that
+/// the walks follow without bounds checks; panics (a builder's bug) when one
+/// is out of range. [`WideBvh::assemble`] checks each node once it has
+/// pointed its leaves at their packets (in the parallel packing, by the
+/// thread that packed it; until stop 44 a serial pass over the finished
+/// tree, which two threads could not share):
 /// - every inner lane (count 0, child not `u32::MAX`) names a node of `nodes`;
 /// - every packet leaf lane's packets `child .. child + packets_for(count)`
 ///   lie in `packets`;
@@ -1460,20 +1474,18 @@ unsafe fn leaf_packets(pk: &TriPackets, first: u32, count: u32) -> &[Tri4] {
 ///   ([`Kernels::closest`], [`Kernels::any`], the batch entries).
 ///
 /// Entry leaves ([`ENTRY_LEAF`]) keep checked indexing.
-fn check_links(nodes: &[WideNode], packets: Option<&TriPackets>) {
-    let npk = packets.map_or(0, |p| p.packets.len());
-    for (i, n) in nodes.iter().enumerate() {
-        for l in 0..WIDTH {
-            let (c, k) = (n.child[l], n.count[l]);
-            if c == u32::MAX && k == 0 {
-                let inverted = (0..3).all(|a| n.b[a][l] == f32::INFINITY && n.b[3 + a][l] == f32::NEG_INFINITY);
-                assert!(inverted, "wide node {i} lane {l}: an empty lane without the inverted box");
-            } else if k == 0 {
-                assert!((c as usize) < nodes.len(), "wide node {i} lane {l}: child {c} of {} nodes", nodes.len());
-            } else if k & ENTRY_LEAF == 0 {
-                let end = c as usize + packets_for(k);
-                assert!(end <= npk, "wide node {i} lane {l}: packets {c}..{end} of {npk}");
-            }
+#[inline]
+fn check_node(i: usize, n: &WideNode, n_nodes: usize, npk: usize) {
+    for l in 0..WIDTH {
+        let (c, k) = (n.child[l], n.count[l]);
+        if c == u32::MAX && k == 0 {
+            let inverted = (0..3).all(|a| n.b[a][l] == f32::INFINITY && n.b[3 + a][l] == f32::NEG_INFINITY);
+            assert!(inverted, "wide node {i} lane {l}: an empty lane without the inverted box");
+        } else if k == 0 {
+            assert!((c as usize) < n_nodes, "wide node {i} lane {l}: child {c} of {n_nodes} nodes");
+        } else if k & ENTRY_LEAF == 0 {
+            let end = c as usize + packets_for(k);
+            assert!(end <= npk, "wide node {i} lane {l}: packets {c}..{end} of {npk}");
         }
     }
 }
@@ -1534,7 +1546,8 @@ fn pack_parallel(
     // Groups of consecutive nodes; in each, the next node's triangles are
     // requested while this node's are packed (as in the serial loop).
     const GROUP: usize = 256;
-    nodes.par_chunks_mut(GROUP).zip(chunks.par_chunks_mut(GROUP)).for_each(|(group, dsts)| {
+    let n_nodes = nodes.len();
+    nodes.par_chunks_mut(GROUP).zip(chunks.par_chunks_mut(GROUP)).enumerate().for_each(|(g, (group, dsts))| {
         if let Some(first) = group.first() {
             touch_leaves(first, touch);
         }
@@ -1557,6 +1570,7 @@ fn pack_parallel(
                 }
                 at += packets_for(count) as u32;
             }
+            check_node(g * GROUP + i, node, n_nodes, npk);
         }
     });
     // SAFETY: the chunks cover the first `npk` slots exactly and every one of
@@ -1565,7 +1579,7 @@ fn pack_parallel(
 }
 
 /// Wide nodes on the longest root-to-leaf path (0 for an empty tree).
-fn levels(nodes: &[WideNode]) -> usize {
+fn levels_of(nodes: &[WideNode]) -> usize {
     if nodes.is_empty() {
         return 0;
     }
@@ -1609,10 +1623,18 @@ mod tests {
         Primitives { triangles, spheres: Vec::new() }
     }
 
-    /// `check_links` accepts the trees the builders make and refuses a tree
+    /// `check_node` accepts the trees the builders make and refuses a tree
     /// with an inner lane past the nodes, a leaf's packets past the packets
     /// or an empty lane without the inverted box (the walks follow those
     /// links without bounds checks).
+    /// [`check_node`] on every node of `nodes`.
+    fn check_links(nodes: &[WideNode], packets: Option<&TriPackets>) {
+        let npk = packets.map_or(0, |p| p.packets.len());
+        for (i, n) in nodes.iter().enumerate() {
+            check_node(i, n, nodes.len(), npk);
+        }
+    }
+
     #[test]
     fn links_out_of_range_are_refused() {
         let prims = std::sync::Arc::new(soup(3000, 11));
