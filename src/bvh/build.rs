@@ -3,6 +3,7 @@
 //! partitioned in place, flattening into depth-first [`Node`]s, and a rayon
 //! fork at large nodes. Split strategies only decide where to cut.
 
+use std::mem::MaybeUninit;
 use std::time::{Duration, Instant};
 
 use glam::{Vec3A, Vec4};
@@ -14,12 +15,22 @@ use crate::geometry::{Aabb, Prim, Primitives};
 use super::{LeafPrims, Node};
 
 /// Nodes with at least this many primitives build their two subtrees in
-/// parallel (when the rayon pool has more than one thread). Small enough that
+/// parallel (when the rayon pool has more than one thread), and at least
+/// [`FORKS_PER_TREE`]-th of the tree's (see there). Small enough that
 /// a mesh of a thousand triangles forks at its root: suzanne (968 triangles)
 /// builds in 0.17-0.19 ms on two threads instead of 0.21 ms with 4096
 /// (`rtdiff bench --race 7 --threads 2`, three runs each), and dragon_87k's
 /// two-thread build is no slower.
 const PARALLEL_THRESHOLD: usize = 512;
+
+/// Nodes fork only if they hold at least this fraction (one in
+/// `FORKS_PER_TREE`) of the tree's primitives: about `2 * FORKS_PER_TREE`
+/// forks per tree, plenty to share two or more threads' work, and each fork
+/// leaves a gap in the [`GappedTree`] whose edges touch pages of their own
+/// (about two per array). With [`PARALLEL_THRESHOLD`] alone dragon_full
+/// forked some 3,400 times, and its two-thread builds took 6,000 page faults
+/// more than with the pieces before (`perf stat -e page-faults`, 8 builds).
+const FORKS_PER_TREE: usize = 128;
 
 /// Passes over at least this many references (the root's boxes, the leaf
 /// order) run in parallel chunks of this size.
@@ -264,22 +275,222 @@ pub struct BuiltTree {
     pub order: Vec<u32>,
 }
 
+/// A value computed for every node of a tree while it is built, bottom-up:
+/// a leaf's from the leaf, an interior node's from the node and its two
+/// children's values (the collapse's cost table, `collapse::CostTable`).
+/// Computed as each node is made, it needs no pass of its own over the
+/// finished tree.
+pub trait Summary: Sync {
+    /// One node's value.
+    type Value: Copy + Send;
+    /// The value of leaf `node`.
+    fn leaf(&self, node: &Node) -> Self::Value;
+    /// The value of interior `node` from its children's.
+    fn interior(&self, node: &Node, left: &Self::Value, right: &Self::Value) -> Self::Value;
+}
+
+/// No value: the plain tree.
+impl Summary for () {
+    type Value = ();
+    fn leaf(&self, _: &Node) {}
+    fn interior(&self, _: &Node, _: &(), _: &()) {}
+}
+
+/// A tree built in place: every subtree over `m` primitives owns the `2m - 1`
+/// slots from its node on (room for its largest possible tree, one
+/// primitive per leaf), and at a fork its right subtree starts right after
+/// its left one's room, so that two threads write their subtrees straight
+/// into one array. Below the forks the nodes follow one another depth-first
+/// as in a sequential build; after a fork's left subtree the slots it left
+/// unused stay unwritten (gaps). Without forks (one thread, or a tree too
+/// small to fork) there are no gaps and the layout is the sequential one.
+///
+/// Each node's [`Summary`] value sits in `values` at the node's index.
+///
+/// Until stop 44 the right subtree at a fork was built into an array of its
+/// own and every such piece was copied into place afterwards (0.1 ms of
+/// dragon_87k's two-thread build, 4.5-5 ms of dragon_full's with the ids),
+/// and the collapse's cost table was a parallel pass of its own over the
+/// finished tree.
+pub struct GappedTree<V> {
+    /// Node slots; those reachable from slot 0 by the links are written.
+    nodes: Vec<MaybeUninit<Node>>,
+    /// Value slots, written where the node slots are.
+    values: Vec<MaybeUninit<V>>,
+    /// Nodes written.
+    count: usize,
+    /// One past the last slot written (0 for an empty tree).
+    end: usize,
+    /// Primitive ids in leaf order.
+    pub order: Vec<u32>,
+}
+
+impl<V> GappedTree<V> {
+    /// Number of nodes (gaps not counted).
+    pub fn len(&self) -> usize {
+        self.count
+    }
+
+    /// True for the tree over no primitives (no nodes).
+    pub fn is_empty(&self) -> bool {
+        self.count == 0
+    }
+
+    /// Node `i`.
+    ///
+    /// # Safety
+    /// `i` must be the root (0, in a tree that is not empty) or reached
+    /// from it by links: an interior node's left child `i + 1` and right
+    /// child `offset`. Those slots are written; gaps are not.
+    #[inline(always)]
+    pub unsafe fn node(&self, i: usize) -> &Node {
+        debug_assert!(i < self.end, "slot {i} past the tree's {}", self.end);
+        // SAFETY: the caller's: a reachable slot, written by `build_gapped`.
+        unsafe { self.nodes.get_unchecked(i).assume_init_ref() }
+    }
+
+    /// Node `i`'s value.
+    ///
+    /// # Safety
+    /// As for [`Self::node`].
+    #[inline(always)]
+    pub unsafe fn value(&self, i: usize) -> &V {
+        debug_assert!(i < self.end, "slot {i} past the tree's {}", self.end);
+        // SAFETY: as in `node`: every written node's value was written with it.
+        unsafe { self.values.get_unchecked(i).assume_init_ref() }
+    }
+
+    /// The gapless depth-first `nodes` (as a sequential build lays them
+    /// out, [`BuiltTree::nodes`]) with `summary`'s values, made in one
+    /// reverse sweep (children follow their parents), and leaf order `order`.
+    pub fn from_nodes<S: Summary<Value = V>>(nodes: Vec<Node>, order: Vec<u32>, summary: &S) -> Self {
+        let count = nodes.len();
+        let mut values: Vec<MaybeUninit<V>> = Vec::with_capacity(count);
+        // SAFETY: uninitialised `MaybeUninit`s are valid values.
+        unsafe { values.set_len(count) };
+        for k in (0..count).rev() {
+            let n = &nodes[k];
+            let v = if n.is_leaf() {
+                summary.leaf(n)
+            } else {
+                let (l, r) = (k + 1, n.offset as usize);
+                assert!(l < r && r < count, "node {k} links to {r} of {count} nodes");
+                // SAFETY: both children lie after `k` (checked), so the sweep wrote them.
+                unsafe { summary.interior(n, values[l].assume_init_ref(), values[r].assume_init_ref()) }
+            };
+            values[k].write(v);
+        }
+        let mut nodes = std::mem::ManuallyDrop::new(nodes);
+        let (ptr, cap) = (nodes.as_mut_ptr(), nodes.capacity());
+        // SAFETY: `Node` and `MaybeUninit<Node>` share a layout; the
+        // allocation passes to the new vector whole.
+        let nodes = unsafe { Vec::from_raw_parts(ptr.cast::<MaybeUninit<Node>>(), count, cap) };
+        Self { nodes, values, count, end: count, order }
+    }
+
+    /// The tree in the sequential depth-first layout, without the values.
+    pub fn into_built(self) -> BuiltTree {
+        let order = self.order;
+        if self.count == self.end {
+            // No gaps: the `count` distinct slots written all lie below
+            // `end == count`, so slots `0..end` are all written.
+            let mut nodes = std::mem::ManuallyDrop::new(self.nodes);
+            let (ptr, cap) = (nodes.as_mut_ptr(), nodes.capacity());
+            // SAFETY: `MaybeUninit<Node>` has `Node`'s layout, the first
+            // `end <= cap` elements are initialised (above), and the
+            // allocation passes to the new vector whole.
+            let nodes = unsafe { Vec::from_raw_parts(ptr.cast::<Node>(), self.end, cap) };
+            return BuiltTree { nodes, order };
+        }
+        // Walk the links depth-first, each node to the next place, the
+        // right links set as the right children are placed.
+        let mut nodes: Vec<Node> = Vec::with_capacity(self.count);
+        let mut stack = vec![(0usize, usize::MAX)];
+        while let Some((i, parent)) = stack.pop() {
+            let at = nodes.len();
+            if parent != usize::MAX {
+                nodes[parent].offset = at as u32;
+            }
+            // SAFETY: slot 0 and the children of reached interior nodes.
+            let node = unsafe { *self.nodes[i].assume_init_ref() };
+            nodes.push(node);
+            if !node.is_leaf() {
+                stack.push((node.offset as usize, at));
+                stack.push((i + 1, usize::MAX));
+            }
+        }
+        BuiltTree { nodes, order }
+    }
+}
+
 /// Run `splitter` over `prims` and flatten the result.
 pub fn build_tree(prims: &Primitives, splitter: &dyn Splitter) -> BuiltTree {
+    build_slots(prims, splitter, &(), fork_min(prims.len())).into_built()
+}
+
+/// The smallest node that forks in a build over `n` primitives on the
+/// current pool (0: none does, on a one-thread pool, where a fork would only
+/// leave gaps, or in a tree too small to fork).
+fn fork_min(n: usize) -> usize {
+    if rayon::current_num_threads() > 1 && n >= PARALLEL_THRESHOLD {
+        PARALLEL_THRESHOLD.max(n / FORKS_PER_TREE)
+    } else {
+        0
+    }
+}
+
+/// Run `splitter` over `prims` into a [`GappedTree`] with `summary`'s value
+/// of every node, and gather the primitive ids in leaf order.
+///
+/// A build that forks computes the values as it makes the nodes, in the
+/// slots beside them. One that does not fork sweeps the finished tree
+/// instead, into an array of the exact size: the value slots of a build
+/// have room for the largest possible tree (`2n - 1` nodes, three to four
+/// times the usual count), and so allocated, suzanne's one-thread builds
+/// (108 KiB of value slots beside 62 KiB of node slots) ran 3% slower in
+/// `rtdiff bench --race` (four alternated pairs), the larger blocks
+/// returned to the system and faulted back in at every build.
+pub fn build_gapped<S: Summary>(prims: &Primitives, splitter: &dyn Splitter, summary: &S) -> GappedTree<S::Value> {
+    let fork_min = fork_min(prims.len());
+    if fork_min == 0 {
+        let tree = build_slots(prims, splitter, &(), 0).into_built();
+        return GappedTree::from_nodes(tree.nodes, tree.order, summary);
+    }
+    build_slots(prims, splitter, summary, fork_min)
+}
+
+/// [`build_gapped`] computing the values in the slots, forking at nodes of
+/// at least `fork_min` primitives (0: nowhere).
+fn build_slots<S: Summary>(
+    prims: &Primitives,
+    splitter: &dyn Splitter,
+    summary: &S,
+    fork_min: usize,
+) -> GappedTree<S::Value> {
     let input = BuildInput::new(prims, splitter.needs_vertex_means());
     let (mut refs, bounds, centroids) = prim_refs_and_bounds(prims);
-    let mut root = Piece { nodes: Vec::with_capacity(2 * prims.len().max(1)), forks: Vec::new(), base: 0 };
-    if !refs.is_empty() {
-        build_node(splitter, &input, &mut refs, bounds.aabb(), Some(centroids), 0, 0, &mut root.nodes, &mut root.forks);
+    let n = refs.len();
+    let slots = (2 * n).saturating_sub(1);
+    let mut nodes: Vec<MaybeUninit<Node>> = Vec::with_capacity(slots);
+    let mut values: Vec<MaybeUninit<S::Value>> = Vec::with_capacity(slots);
+    // SAFETY: uninitialised `MaybeUninit`s are valid values.
+    unsafe {
+        nodes.set_len(slots);
+        values.set_len(slots);
     }
-    // The nodes' copy into place and the ids' gathering are independent: on
-    // a pool they run as one parallel phase.
-    let (nodes, order) = if parallel_pass(refs.len()) {
-        rayon::join(|| root.flatten(), || refs.par_iter().with_min_len(PARALLEL_PASS).map(PrimRef::id).collect())
+    let (mut count, mut end) = (0, 0);
+    if n > 0 {
+        let out = Slots { nodes: nodes.as_mut_ptr(), values: values.as_mut_ptr(), len: slots };
+        let c = Ctx { splitter, summary, input: &input, out, fork_min };
+        let root = build_node(&c, &mut refs, bounds.aabb(), Some(centroids), 0, 0, 0);
+        (count, end) = (root.count, root.end);
+    }
+    let order = if parallel_pass(n) {
+        refs.par_iter().with_min_len(PARALLEL_PASS).map(PrimRef::id).collect()
     } else {
-        (root.flatten(), refs.iter().map(PrimRef::id).collect())
+        refs.iter().map(PrimRef::id).collect()
     };
-    BuiltTree { nodes, order }
+    GappedTree { nodes, values, count, end, order }
 }
 
 /// Run `splitter` over `prims`, flatten the result and gather the primitives in leaf order.
@@ -290,149 +501,125 @@ pub fn build_with(prims: &Primitives, splitter: &dyn Splitter, builder: Builder)
     BinaryBvh { nodes: tree.nodes, prims: leaf_prims, builder, build_time: start.elapsed() }
 }
 
+/// The node and value slots of a [`GappedTree`] under construction, shared
+/// by the threads that build its subtrees (each writes the slots of its own
+/// subtree only, see [`build_node`]).
+struct Slots<V> {
+    nodes: *mut MaybeUninit<Node>,
+    values: *mut MaybeUninit<V>,
+    len: usize,
+}
+
+// SAFETY: the slots are written through `put`, whose callers write disjoint
+// slots from different threads (the ranges of different subtrees).
+unsafe impl<V: Send> Sync for Slots<V> {}
+
+impl<V> Slots<V> {
+    /// Write `node` and `value` into slot `i`.
+    ///
+    /// # Safety
+    /// No other thread may access slot `i` meanwhile.
+    #[inline(always)]
+    unsafe fn put(&self, i: usize, node: Node, value: V) {
+        assert!(i < self.len, "node slot {i} of {}", self.len);
+        // SAFETY: in bounds (above); exclusive by the caller.
+        unsafe {
+            (*self.nodes.add(i)).write(node);
+            (*self.values.add(i)).write(value);
+        }
+    }
+
+    /// The value in slot `i`.
+    ///
+    /// # Safety
+    /// Slot `i` must have been written ([`Self::put`]) and no thread may
+    /// write it meanwhile.
+    #[inline(always)]
+    unsafe fn value(&self, i: usize) -> &V {
+        assert!(i < self.len, "value slot {i} of {}", self.len);
+        // SAFETY: in bounds (above), written and not being written (the caller).
+        unsafe { (*self.values.add(i)).assume_init_ref() }
+    }
+}
+
+/// What every node's build shares: the split strategy, the summary, the
+/// input, the slots and the smallest node that forks (0: none does).
+struct Ctx<'a, S: Summary> {
+    splitter: &'a dyn Splitter,
+    summary: &'a S,
+    input: &'a BuildInput,
+    out: Slots<S::Value>,
+    fork_min: usize,
+}
+
+/// What building a subtree reports: one past its last slot written and its
+/// number of nodes. (Its root's value is read from the root's slot: moved
+/// out through the returns of the recursion, the collapse's 56-byte entry
+/// cost 50 instructions per node, callgrind on suzanne.)
+struct Built {
+    end: usize,
+    count: usize,
+}
+
 /// Build the subtree over `idx` (box `bounds`, primitives from `first` on,
-/// at level `depth`) depth-first at the end of `out`. At a fork the right
-/// subtree is built apart, on the pool, into a [`Piece`] pushed on `forks`
-/// (the list of the piece that `out` belongs to).
-#[allow(clippy::too_many_arguments)]
-fn build_node(
-    s: &dyn Splitter,
-    input: &BuildInput,
+/// at level `depth`) with its root in slot `at`, writing only the slots
+/// `at .. at + 2 * idx.len() - 1` (by induction: a leaf takes one; a node
+/// over `n` whose sides hold `m` and `n - m` takes one, its left subtree at
+/// most `2m - 1` from `at + 1`, its right one at most `2(n - m) - 1` from
+/// `at + 2m` at a fork or from the left one's end otherwise, at most
+/// `1 + (2m - 1) + 2(n - m) - 1` in all). At a fork the two subtrees are
+/// built in parallel, each in its own disjoint slots.
+fn build_node<S: Summary>(
+    c: &Ctx<S>,
     idx: &mut [PrimRef],
     bounds: Aabb,
     centroids: Option<BoxA>,
     first: u32,
     depth: u32,
-    out: &mut Vec<Node>,
-    forks: &mut Vec<(u32, Piece)>,
-) {
+    at: usize,
+) -> Built {
+    let (s, summary, out) = (c.splitter, c.summary, &c.out);
     let n = idx.len();
-    let me = out.len();
-    out.push(Node::leaf(bounds, first, n as u32));
+    let leaf = || {
+        let node = Node::leaf(bounds, first, n as u32);
+        let value = summary.leaf(&node);
+        // SAFETY: slot `at` is this subtree's own (see above).
+        unsafe { out.put(at, node, value) };
+        Built { end: at + 1, count: 1 }
+    };
     if n <= 1 || depth >= s.max_depth() {
-        return;
+        return leaf();
     }
-    let Some(Split { mid, bounds: child_bounds }) = s.split(input, idx, &bounds, centroids, depth) else {
-        return;
+    let Some(Split { mid, bounds: child_bounds }) = s.split(c.input, idx, &bounds, centroids, depth) else {
+        return leaf();
     };
     // Children compute their own centroid boxes when they need them (see
     // `build_sah::partition_branchless`); only the root's comes from outside.
+    // Both sides non-empty: the slot ranges above rest on it.
     assert!(mid > 0 && mid < n, "split strategy returned an empty side");
     let (l, r) = idx.split_at_mut(mid);
     let (lb, rb) = child_bounds.unwrap_or_else(|| (bounds_of(l), bounds_of(r)));
     let right_first = first + mid as u32;
-    // On a one-thread pool the fork would only add copies of the subtrees.
-    if n >= PARALLEL_THRESHOLD && rayon::current_num_threads() > 1 {
-        // The left subtree goes straight into `out` (right after this node,
-        // as in the sequential order); the right one into a piece of its
-        // own, put in place once the whole tree is built.
-        let ((), right) = rayon::join(
-            || build_node(s, input, l, lb, None, first, depth + 1, out, forks),
-            || {
-                let mut piece = Piece { nodes: Vec::with_capacity(r.len()), forks: Vec::new(), base: 0 };
-                build_node(s, input, r, rb, None, right_first, depth + 1, &mut piece.nodes, &mut piece.forks);
-                piece
-            },
+    let (left, right, right_at) = if c.fork_min > 0 && n >= c.fork_min {
+        // The right subtree starts after the left one's room.
+        let right_at = at + 2 * mid;
+        let (left, right) = rayon::join(
+            || build_node(c, l, lb, None, first, depth + 1, at + 1),
+            || build_node(c, r, rb, None, right_first, depth + 1, right_at),
         );
-        // The link is set when the pieces are laid out (`Piece::lay_out`).
-        out[me] = Node::interior(bounds, u32::MAX);
-        forks.push((me as u32, right));
+        (left, right, right_at)
     } else {
-        build_node(s, input, l, lb, None, first, depth + 1, out, forks);
-        let right = out.len() as u32;
-        build_node(s, input, r, rb, None, right_first, depth + 1, out, forks);
-        out[me] = Node::interior(bounds, right);
-    }
-}
-
-/// Part of a tree built on its own: depth-first nodes whose links are
-/// indices into `nodes`, except at the forks, whose right subtrees are
-/// pieces of their own.
-///
-/// Below a node that does not fork nothing forks (a fork needs more
-/// primitives), so a piece's forks lie on its leftmost path and the deepest
-/// ends first: in depth-first order the piece's nodes come first, then the
-/// forks' pieces in the order they were pushed. Each node is copied once,
-/// into its place in the final array. (Until stop 36 each right subtree was
-/// copied into its parent's array at its fork, and so again at every fork
-/// above it whose right side it was in: dragon_full forks down ten levels.
-/// Callgrind, instructions per build of dragon_87k through `build_tracer`,
-/// `examples/call_path.rs` `build`: one thread 161.7M; two threads 166.7M
-/// before, 164.0M with the pieces.)
-struct Piece {
-    /// The piece's nodes, depth-first.
-    nodes: Vec<Node>,
-    /// Each fork's index in `nodes` and the piece of its right subtree, deepest fork first.
-    forks: Vec<(u32, Piece)>,
-    /// Index of the piece's first node in the final array (set by [`Self::lay_out`]).
-    base: u32,
-}
-
-impl Piece {
-    /// The whole tree in one depth-first array (`self` is the root's piece).
-    fn flatten(mut self) -> Vec<Node> {
-        if self.forks.is_empty() {
-            return self.nodes;
-        }
-        let total = self.lay_out(0);
-        let mut rest: Vec<&Piece> = Vec::new();
-        for (_, p) in &self.forks {
-            p.preorder(&mut rest);
-        }
-        let mut out = self.nodes;
-        let start = out.len();
-        out.reserve(total as usize - start);
-        // Cut the room after the root's nodes into one slot range per piece
-        // (depth-first order is increasing `base`), in pieces of at most
-        // `PARALLEL_PASS` nodes.
-        let mut jobs = Vec::new();
-        let mut room = &mut out.spare_capacity_mut()[..total as usize - start];
-        for p in rest {
-            let (dst, tail) = room.split_at_mut(p.nodes.len());
-            room = tail;
-            for (d, s) in dst.chunks_mut(PARALLEL_PASS).zip(p.nodes.chunks(PARALLEL_PASS)) {
-                jobs.push((d, s, p.base));
-            }
-        }
-        debug_assert!(room.is_empty());
-        let copy = |(dst, src, base): (&mut [std::mem::MaybeUninit<Node>], &[Node], u32)| {
-            for (d, n) in dst.iter_mut().zip(src) {
-                d.write(if n.is_leaf() { *n } else { Node { offset: n.offset + base, ..*n } });
-            }
-        };
-        if parallel_pass(total as usize - start) {
-            jobs.into_par_iter().for_each(copy);
-        } else {
-            jobs.into_iter().for_each(copy);
-        }
-        // SAFETY: the `total - start` slots after `start` were reserved above,
-        // and the jobs, cut alike from them and from the pieces' nodes (which
-        // number exactly `total - start`, by `lay_out`), wrote every one.
-        unsafe { out.set_len(total as usize) };
-        out
-    }
-
-    /// Place this piece at `base` and its forks' pieces after it, and point
-    /// each fork at its right subtree (relative to `base`, as the piece's
-    /// other links are until the copy adds `base`). Returns the index after
-    /// the last node placed.
-    fn lay_out(&mut self, base: u32) -> u32 {
-        self.base = base;
-        let mut next = base + self.nodes.len() as u32;
-        for (at, p) in &mut self.forks {
-            self.nodes[*at as usize].offset = next - base;
-            next = p.lay_out(next);
-        }
-        next
-    }
-
-    /// This piece and its forks' pieces in depth-first (increasing `base`) order.
-    fn preorder<'a>(&'a self, out: &mut Vec<&'a Piece>) {
-        out.push(self);
-        for (_, p) in &self.forks {
-            p.preorder(out);
-        }
-    }
+        let left = build_node(c, l, lb, None, first, depth + 1, at + 1);
+        let right_at = left.end;
+        let right = build_node(c, r, rb, None, right_first, depth + 1, right_at);
+        (left, right, right_at)
+    };
+    let node = Node::interior(bounds, right_at as u32);
+    // SAFETY: the children's builds, finished, wrote their roots' slots.
+    let value = unsafe { summary.interior(&node, out.value(at + 1), out.value(right_at)) };
+    // SAFETY: slot `at` is this subtree's own, and its children's slots follow it.
+    unsafe { out.put(at, node, value) };
+    Built { end: right.end, count: 1 + left.count + right.count }
 }
 
 /// Move the entries of `idx` satisfying `left` to the front; returns how many there are.
@@ -488,10 +675,10 @@ mod tests {
         if n.is_leaf() { n.count } else { leaf_span(nodes, i + 1) + leaf_span(nodes, n.offset as usize) }
     }
 
-    /// The binary tree built on two threads (its right subtrees built apart
-    /// in pieces, laid out once at the end) is node for node the one-thread
-    /// tree, for the SAH builder and for the median builder's one-primitive
-    /// leaves (the most nodes, the deepest forks).
+    /// The binary tree built on two threads (its subtrees written in place,
+    /// with gaps, then laid out without them) is node for node the
+    /// one-thread tree, for the SAH builder and for the median builder's
+    /// one-primitive leaves (the most nodes, the deepest forks).
     #[test]
     fn two_threads_lay_out_the_one_thread_tree() {
         let prims = scattered(60_000, 7);
@@ -504,6 +691,15 @@ mod tests {
             };
             let (a, b) = (build(1), build(2));
             assert!(a.nodes.len() > 10_000);
+            // The two-thread build forked, and (but for one primitive per
+            // leaf, which fills every subtree's room) left gaps.
+            let gapped = rayon::ThreadPoolBuilder::new()
+                .num_threads(2)
+                .build()
+                .unwrap()
+                .install(|| build_slots(&prims, splitter, &(), fork_min(prims.len())));
+            assert_eq!(gapped.count, a.nodes.len());
+            assert!(gapped.end > gapped.count || std::ptr::addr_eq(splitter, &median), "no gaps");
             check_links(&a);
             assert!(a.nodes == b.nodes, "1 and 2 threads laid out different nodes");
             assert_eq!(a.order, b.order);

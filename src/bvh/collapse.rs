@@ -15,10 +15,8 @@
 //! lanes are full), this fills nodes better near the bottom, where greedy
 //! collapsing leaves many two-lane nodes, and merges small sibling leaves into
 //! one leaf where a node visit costs more than the extra packet.
-
-use std::mem::MaybeUninit;
-
 use super::Node;
+use super::build::{GappedTree, Summary};
 use super::wide::{WIDTH, WideNode};
 
 /// Cost of visiting one wide node per unit of (half) surface area.
@@ -42,21 +40,12 @@ type Row = [f32; WIDTH + 1];
 /// parallel (when the rayon pool has more than one thread).
 const PARALLEL_THRESHOLD: u32 = 1 << 14;
 
-/// Subtrees of at least this many binary nodes fill their two children's
-/// table entries in parallel. Lower than [`PARALLEL_THRESHOLD`] (which let
-/// only the top two levels of dragon_87k's 45,000 nodes fork): the filling
-/// is pure arithmetic over a node's two children and balances better in
-/// more pieces. `fill` of dragon_87k, mean of 41 (a throwaway timer, not
-/// committed), one thread 1.35-1.45 ms; two threads with 2^14 nodes
-/// 0.88-0.98 ms, 2^12 0.77-0.83 ms, 2^10 0.77-0.79 ms.
-const FILL_PARALLEL_THRESHOLD: usize = 1 << 12;
-
 /// Wide nodes per piece when the parallel subtrees are copied into place (1 MiB).
 const COPY_PIECE: usize = 4096;
 
 /// One binary node's entry of the dynamic-programming tables.
 #[derive(Clone, Copy)]
-struct Entry {
+pub struct Entry {
     /// `cost[i]`: cheapest representation of the subtree in at most `i` lanes.
     cost: Row,
     /// `split[i]`: lanes given to the left child in the cheapest way to open
@@ -68,11 +57,37 @@ struct Entry {
     range: (u32, u32),
 }
 
-/// The dynamic-programming tables of one binary tree.
+/// The dynamic-programming tables of one binary tree: its nodes and each
+/// node's [`Entry`], as the build made them ([`CostTable`]).
 struct Plan<'a> {
-    bin: &'a [Node],
-    /// Entry of each binary node.
-    t: Vec<Entry>,
+    tree: &'a GappedTree<Entry>,
+}
+
+/// The collapse's [`Entry`] of every binary node, the [`Summary`] that
+/// [`super::build::build_gapped`] computes: as the binary tree is built
+/// when the build forks, in a sweep over the finished tree otherwise.
+/// `block`: triangles per leaf test in the cost model
+/// ([`super::packet::leaf_block`]).
+///
+/// Until stop 44 the table was always filled after the build, on a pool in
+/// a parallel pass of its own (0.40 ms of dragon_87k's two-thread build).
+pub struct CostTable {
+    /// Triangles per leaf test.
+    pub block: u32,
+}
+
+impl Summary for CostTable {
+    type Value = Entry;
+
+    #[inline]
+    fn leaf(&self, node: &Node) -> Entry {
+        entry(node, None, self.block)
+    }
+
+    #[inline]
+    fn interior(&self, node: &Node, left: &Entry, right: &Entry) -> Entry {
+        entry(node, Some((left, right)), self.block)
+    }
 }
 
 /// Half surface area of a binary node's box.
@@ -183,56 +198,29 @@ fn both_children(cl: &Row, cr: &Row) -> (Row, [u8; WIDTH + 1]) {
     (d, s)
 }
 
-/// Fill `t`, the entries of the subtree of binary node `base` (the nodes
-/// `base .. base + t.len()`, depth-first), children before parents; the two
-/// subtrees of a large node in parallel. Every entry is written exactly
-/// once, each after its children's: the table needs no initialisation (its
-/// pages are first touched here, by both threads of a parallel fill).
-fn fill(bin: &[Node], base: usize, t: &mut [MaybeUninit<Entry>], block: u32) {
-    let node = &bin[base];
-    if !node.is_leaf() && t.len() >= FILL_PARALLEL_THRESHOLD && rayon::current_num_threads() > 1 {
-        let right = node.offset as usize;
-        let (head, rest) = t.split_at_mut(1);
-        let (lt, rt) = rest.split_at_mut(right - base - 1);
-        rayon::join(|| fill(bin, base + 1, lt, block), || fill(bin, right, rt, block));
-        // SAFETY: the two calls above wrote every entry of `lt` and `rt`,
-        // among them their first ones, the children's.
-        let children = unsafe { (lt[0].assume_init_ref(), rt[0].assume_init_ref()) };
-        head[0].write(entry(node, Some(children), block));
-        return;
-    }
-    // Depth-first order puts every child after its parent: a reverse sweep
-    // visits children first.
-    for k in (0..t.len()).rev() {
-        let n = &bin[base + k];
-        let e = if n.is_leaf() {
-            entry(n, None, block)
-        } else {
-            let (l, r) = (k + 1, n.offset as usize - base);
-            // SAFETY: both children lie after `k` in this subtree's range
-            // (depth-first order), so the sweep wrote them already.
-            entry(n, Some(unsafe { (t[l].assume_init_ref(), t[r].assume_init_ref()) }), block)
-        };
-        t[k].write(e);
-    }
-}
-
 impl<'a> Plan<'a> {
-    fn new(bin: &'a [Node], block: u32) -> Self {
-        let mut t = Vec::with_capacity(bin.len());
-        if !bin.is_empty() {
-            fill(bin, 0, &mut t.spare_capacity_mut()[..bin.len()], block);
-            // SAFETY: `fill` wrote all `bin.len()` entries (see there).
-            unsafe { t.set_len(bin.len()) };
-        }
-        Plan { bin, t }
+    /// Binary node `n` (reached from the root by the links).
+    #[inline(always)]
+    fn node(&self, n: usize) -> &'a Node {
+        // SAFETY: the plan is read from the root along the links only: `n`
+        // is the root (`collapse`), a child `n + 1` or `offset` of an
+        // interior node reached so (`emit`), or a node an emitted lane
+        // names (one of those).
+        unsafe { self.tree.node(n) }
+    }
+
+    /// Binary node `n`'s entry (as for [`Self::node`]).
+    #[inline(always)]
+    fn entry(&self, n: usize) -> &'a Entry {
+        // SAFETY: as in `node`.
+        unsafe { self.tree.value(n) }
     }
 
     /// Append the lanes representing subtree `n` in at most `i` lanes (wide
     /// children as [`Lane::PENDING`], built by [`Self::build_node`]).
     fn emit(&self, n: usize, i: usize, lanes: &mut Lanes) {
-        let node = &self.bin[n];
-        let e = &self.t[n];
+        let node = self.node(n);
+        let e = self.entry(n);
         if i == 1 || node.is_leaf() {
             if e.as_leaf {
                 let (first, count) = e.range;
@@ -260,11 +248,11 @@ impl<'a> Plan<'a> {
         let me = out.len();
         out.push(WideNode::EMPTY);
         let mut lanes = Lanes::default();
-        let node = &self.bin[n];
+        let node = self.node(n);
         if node.is_leaf() {
             lanes.push(Lane { node: n, child: node.offset, count: node.count });
         } else {
-            let j = self.t[n].split[WIDTH] as usize;
+            let j = self.entry(n).split[WIDTH] as usize;
             self.emit(n + 1, j, &mut lanes);
             self.emit(node.offset as usize, WIDTH - j, &mut lanes);
         }
@@ -279,7 +267,7 @@ impl<'a> Plan<'a> {
         }
         let pending = &pending[..np];
         let mut below = 0;
-        if self.t[n].range.1 >= PARALLEL_THRESHOLD && pending.len() > 1 && rayon::current_num_threads() > 1 {
+        if self.entry(n).range.1 >= PARALLEL_THRESHOLD && pending.len() > 1 && rayon::current_num_threads() > 1 {
             use rayon::prelude::*;
             let subs: Vec<(Vec<WideNode>, u32)> = pending
                 .par_iter()
@@ -287,7 +275,7 @@ impl<'a> Plan<'a> {
                     // Room for twice the usual count (about one wide node per
                     // eight primitives), so that the vector does not grow by
                     // copies; it grows past that if it must.
-                    let mut v = Vec::with_capacity(self.t[lanes[k].node].range.1 as usize / 4 + 1);
+                    let mut v = Vec::with_capacity(self.entry(lanes[k].node).range.1 as usize / 4 + 1);
                     let (_, levels) = self.build_node(lanes[k].node, &mut v);
                     (v, levels)
                 })
@@ -337,7 +325,7 @@ impl<'a> Plan<'a> {
         }
         let mut w = WideNode::EMPTY;
         for (k, lane) in lanes.iter().enumerate() {
-            w.set_lane(k, &self.bin[lane.node], lane.child, lane.count);
+            w.set_lane(k, self.node(lane.node), lane.child, lane.count);
         }
         out[me] = w;
         (me as u32, below + 1)
@@ -374,23 +362,29 @@ impl Lanes {
     }
 }
 
-/// Collapse binary `bin` (depth-first, as the builders make it) into wide
-/// nodes, depth-first; node 0 is the root. Empty for an empty tree. The
-/// result does not depend on the number of threads. `block`: triangles per
-/// leaf test in the cost model ([`super::packet::leaf_block`]).
+/// Collapse the binary `tree` into wide nodes, depth-first; node 0 is the
+/// root. Empty for an empty tree. The result does not depend on the number
+/// of threads (nor on the gaps of the tree's layout: the collapse follows
+/// its links).
 ///
 /// Also returns the wide levels, the nodes on the longest root-to-leaf path
 /// (0 for an empty tree), counted as the nodes are made, instead of a
 /// serial walk over the finished tree (until stop 44; with the links'
 /// check moved into the packing, 139,000 instructions fewer per dragon_87k
 /// build, callgrind).
-pub fn collapse(bin: &[Node], block: u32) -> (Vec<WideNode>, usize) {
-    let mut out = super::huge::vec_with_capacity(bin.len() / 4 + 1);
+pub fn collapse(tree: &GappedTree<Entry>) -> (Vec<WideNode>, usize) {
+    let mut out = super::huge::vec_with_capacity(tree.len() / 4 + 1);
     let mut levels = 0;
-    if !bin.is_empty() {
-        levels = Plan::new(bin, block).build_node(0, &mut out).1 as usize;
+    if !tree.is_empty() {
+        levels = Plan { tree }.build_node(0, &mut out).1 as usize;
     }
     (out, levels)
+}
+
+/// [`collapse`] of a gapless depth-first binary tree (a [`super::BinaryBvh`]'s
+/// nodes), its table made in one sweep. `block`: as in [`CostTable`].
+pub fn collapse_nodes(bin: &[Node], block: u32) -> (Vec<WideNode>, usize) {
+    collapse(&GappedTree::from_nodes(bin.to_vec(), Vec::new(), &CostTable { block }))
 }
 
 #[cfg(test)]
@@ -504,7 +498,7 @@ pub(crate) mod tests {
             let prims = scattered(n, n as u64);
             let cfg = AccelConfig { builder, ..Default::default() };
             let bin = crate::bvh::build_binary(&prims, &cfg);
-            let (wide, _) = collapse(&bin.nodes, crate::bvh::packet::leaf_block(prims.len()));
+            let (wide, _) = collapse_nodes(&bin.nodes, crate::bvh::packet::leaf_block(prims.len()));
             check(&wide, &bin.nodes, n);
         }
     }
@@ -517,7 +511,7 @@ pub(crate) mod tests {
         let prims = scattered(4096, 9);
         let cfg = AccelConfig { builder: Builder::Median, ..Default::default() };
         let bin = crate::bvh::build_binary(&prims, &cfg);
-        let (wide, _) = collapse(&bin.nodes, crate::bvh::packet::leaf_block(prims.len()));
+        let (wide, _) = collapse_nodes(&bin.nodes, crate::bvh::packet::leaf_block(prims.len()));
         let lanes: usize = wide.iter().map(WideNode::used).sum();
         assert!(lanes as f64 / wide.len() as f64 > 4.0, "mean fill {}", lanes as f64 / wide.len() as f64);
         let max_leaf = wide.iter().flat_map(|w| w.count).max().unwrap_or(0);
@@ -535,17 +529,39 @@ pub(crate) mod tests {
             pool.install(|| crate::bvh::build_wide(&prims, &AccelConfig::default()))
         };
         let (a, b) = (build(1), build(2));
-        let bits = |w: &crate::bvh::WideBvh| -> Vec<u32> {
-            let nodes =
-                w.nodes.iter().flat_map(|n| n.b.iter().flatten().map(|f| f.to_bits()).chain(n.child).chain(n.count));
-            let packets = w
-                .packets
-                .iter()
-                .flat_map(|p| &p.packets)
-                .flat_map(|p| p.v.iter().flatten().map(|f| f.to_bits()).chain(p.id));
-            nodes.chain(packets).collect()
-        };
         assert!(a.nodes.len() > 1000);
         assert!(bits(&a) == bits(&b), "1 and 2 threads built different trees");
+    }
+
+    /// Every float of a wide tree's nodes and packets as bits, and every link, id and count.
+    fn bits(w: &crate::bvh::WideBvh) -> Vec<u32> {
+        let nodes =
+            w.nodes.iter().flat_map(|n| n.b.iter().flatten().map(|f| f.to_bits()).chain(n.child).chain(n.count));
+        let packets = w
+            .packets
+            .iter()
+            .flat_map(|p| &p.packets)
+            .flat_map(|p| p.v.iter().flatten().map(|f| f.to_bits()).chain(p.id));
+        nodes.chain(packets).collect()
+    }
+
+    /// The cost table computed while a two-thread build makes its nodes
+    /// (in the slots beside them, a layout with gaps) is the table a sweep
+    /// over the finished, gapless tree makes: the wide trees collapsed from
+    /// the two are the same bit for bit, for every builder.
+    #[test]
+    fn table_made_during_the_build_is_the_swept_one() {
+        let prims = scattered(100_000, 5);
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        for builder in [Builder::Sah, Builder::Median, Builder::SahVolume] {
+            let cfg = AccelConfig { builder, ..Default::default() };
+            let (during, swept) = pool.install(|| {
+                let during = crate::bvh::build_wide(&prims, &cfg);
+                let swept = crate::bvh::WideBvh::from_binary(crate::bvh::build_binary(&prims, &cfg));
+                (during, swept)
+            });
+            assert!(during.nodes.len() > 1000);
+            assert!(bits(&during) == bits(&swept), "{builder:?}: the tables differ");
+        }
     }
 }

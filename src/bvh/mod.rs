@@ -64,7 +64,8 @@ fn splitter(cfg: &BvhConfig, prims: usize) -> Box<dyn build::Splitter> {
 /// Build the tree `cfg` asks for and collapse it into the 8-wide BVH of the
 /// `fast` traversal, gathering the leaves' triangles straight into packets.
 pub fn build_wide(prims: &Primitives, cfg: impl Into<BvhConfig>) -> WideBvh {
-    WideBvh::from_tree(prims, &build::build_tree(prims, splitter(&cfg.into(), prims.len()).as_ref()))
+    let table = collapse::CostTable { block: packet::leaf_block(prims.len()) };
+    WideBvh::from_tree(prims, &build::build_gapped(prims, splitter(&cfg.into(), prims.len()).as_ref(), &table))
 }
 
 /// Build the binary BVH `cfg` asks for and its 8-wide collapse, and gather

@@ -20,7 +20,7 @@ use glam::Vec3;
 use crate::geometry::triangle::TriangleKernel;
 use crate::geometry::{Hit, Primitives, Ray, TriangleTest};
 
-use super::build::BuiltTree;
+use super::build::GappedTree;
 use super::packet::{LeafRay, PW, Tri4, TriPackets, packets_for};
 use super::slab::{cull_bound, far_scale};
 use super::{BinaryBvh, LeafPrims, Node};
@@ -837,17 +837,20 @@ pub const PREFETCH_ALL_BYTES: usize = 2 << 20;
 impl WideBvh {
     /// Collapse `bvh` into 8-wide nodes (see [`super::collapse`]).
     pub fn from_binary(bvh: BinaryBvh) -> Self {
-        let (nodes, levels) = super::collapse::collapse(&bvh.nodes, super::packet::leaf_block(bvh.prims.entries.len()));
+        let block = super::packet::leaf_block(bvh.prims.entries.len());
+        let tree = GappedTree::from_nodes(bvh.nodes, Vec::new(), &super::collapse::CostTable { block });
         let e = &bvh.prims.entries;
         let num_triangles = bvh.prims.num_triangles;
         let spheres = bvh.prims.spheres.clone();
-        Self::assemble((nodes, levels), num_triangles, spheres, e.len(), |k| e[k].id, |k| e[k].v, |_| {})
+        let collapsed = super::collapse::collapse(&tree);
+        Self::assemble(collapsed, num_triangles, spheres, e.len(), |k| e[k].id, |k| e[k].v, |_| {})
     }
 
-    /// [`Self::from_binary`] for a tree whose primitives are not gathered yet:
-    /// leaf triangles go straight from `prims` into packets.
-    pub fn from_tree(prims: &Primitives, tree: &BuiltTree) -> Self {
-        let collapsed = super::collapse::collapse(&tree.nodes, super::packet::leaf_block(prims.len()));
+    /// [`Self::from_binary`] for a tree built with the collapse's table
+    /// ([`super::collapse::CostTable`]) whose primitives are not gathered
+    /// yet: leaf triangles go straight from `prims` into packets.
+    pub fn from_tree(prims: &Primitives, tree: &GappedTree<super::collapse::Entry>) -> Self {
+        let collapsed = super::collapse::collapse(tree);
         let nt = prims.triangles.len() as u32;
         let vertices = |k: usize| {
             let id = tree.order[k] as usize;
