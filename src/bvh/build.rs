@@ -14,9 +14,9 @@ use crate::geometry::{Aabb, Prim, Primitives};
 
 use super::{LeafPrims, Node};
 
-/// Nodes with at least this many primitives build their two subtrees in
-/// parallel (when the rayon pool has more than one thread), and at least
-/// [`FORKS_PER_TREE`]-th of the tree's (see there). Small enough that
+/// Nodes with at least this many primitives (and at least the share of the
+/// tree's that [`FORKS_PER_TREE`] sets) build their two subtrees in parallel
+/// when the rayon pool has more than one thread. Small enough that
 /// a mesh of a thousand triangles forks at its root: suzanne (968 triangles)
 /// builds in 0.17-0.19 ms on two threads instead of 0.21 ms with 4096
 /// (`rtdiff bench --race 7 --threads 2`, three runs each), and dragon_87k's
@@ -275,11 +275,11 @@ pub struct BuiltTree {
     pub order: Vec<u32>,
 }
 
-/// A value computed for every node of a tree while it is built, bottom-up:
-/// a leaf's from the leaf, an interior node's from the node and its two
-/// children's values (the collapse's cost table, `collapse::CostTable`).
-/// Computed as each node is made, it needs no pass of its own over the
-/// finished tree.
+/// A value computed for every node of a tree, bottom-up: a leaf's from the
+/// leaf, an interior node's from the node and its two children's values
+/// (the collapse's cost table, `collapse::CostTable`). A build that forks
+/// computes each as it makes the node, without a pass of its own over the
+/// finished tree ([`build_gapped`]).
 pub trait Summary: Sync {
     /// One node's value.
     type Value: Copy + Send;

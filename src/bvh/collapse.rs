@@ -381,12 +381,6 @@ pub fn collapse(tree: &GappedTree<Entry>) -> (Vec<WideNode>, usize) {
     (out, levels)
 }
 
-/// [`collapse`] of a gapless depth-first binary tree (a [`super::BinaryBvh`]'s
-/// nodes), its table made in one sweep. `block`: as in [`CostTable`].
-pub fn collapse_nodes(bin: &[Node], block: u32) -> (Vec<WideNode>, usize) {
-    collapse(&GappedTree::from_nodes(bin.to_vec(), Vec::new(), &CostTable { block }))
-}
-
 #[cfg(test)]
 pub(crate) mod tests {
     use glam::Vec3;
@@ -407,6 +401,12 @@ pub(crate) mod tests {
             })
             .collect();
         Primitives { triangles, spheres: Vec::new() }
+    }
+
+    /// [`collapse`] of a gapless depth-first binary tree (a [`crate::bvh::BinaryBvh`]'s
+    /// nodes), its table made in one sweep. `block`: as in [`CostTable`].
+    fn collapse_nodes(bin: &[Node], block: u32) -> (Vec<WideNode>, usize) {
+        collapse(&GappedTree::from_nodes(bin.to_vec(), Vec::new(), &CostTable { block }))
     }
 
     /// The double loop `both_children` replaced (the definition).
