@@ -13,7 +13,7 @@
 //! with the pool's thread count as in the race; `--features embree`; the
 //! median is printed), or `build` (N builds, each called from a pool of `RAYON_NUM_THREADS` threads and
 //! timed by the wall clock, with the median and quartiles printed; counted by
-//! `--toggle-collect=call_path::build_all`), and TRACER one of `native`, `native-mt` (the Moller-Trumbore test), `embree`, `embree-default` (MEDIUM quality).
+//! `--toggle-collect=call_path::build_all`), and TRACER one of `native`, `native-avx2` (the walks compiled for AVX2), `native-mt` (the Moller-Trumbore test), `embree`, `embree-default` (MEDIUM quality).
 
 use std::path::Path;
 
@@ -67,7 +67,7 @@ fn main() -> rtdiff::Result<()> {
         ..Default::default()
     };
     let cfg = match which {
-        "native" => native,
+        "native" | "native-avx2" => native,
         "native-mt" => AccelConfig { triangle_test: rtdiff::geometry::TriangleTest::MollerTrumbore, ..native },
         "embree" | "embree-default" => AccelConfig {
             backend: Backend::Embree,
@@ -225,7 +225,17 @@ fn main() -> rtdiff::Result<()> {
     // primary rays), so packets of consecutive rays stay coherent.
     let start = (base.len().saturating_sub(n)) / 2;
     let rays: Vec<Ray> = base[start..].iter().take(n).copied().collect();
-    let tracer = build_tracer(prims, &cfg)?;
+    // `native-avx2`: the walks compiled for AVX2 (`WalkIsa::Avx2`, as
+    // `rtdiff bench --race --rtdiff-isa avx2`), for a CPU without AVX-512.
+    let tracer: Box<dyn Tracer> = if which == "native-avx2" {
+        let mut t = rtdiff::bvh::BvhTracer::new(&prims, &cfg);
+        if !t.force_isa(rtdiff::bvh::wide::WalkIsa::Avx2) {
+            return Err(rtdiff::Error::Invalid("this CPU does not run the AVX2 walks".into()));
+        }
+        Box::new(t)
+    } else {
+        build_tracer(prims, &cfg)?
+    };
     let repeat: usize = args.get(4).and_then(|s| s.parse().ok()).unwrap_or(1);
     let mut hits = 0;
     for _ in 0..repeat.max(1) {
