@@ -12,7 +12,8 @@
 //! builds, each timed after builds by the other tracer, Embree on a device
 //! with the pool's thread count as in the race; `--features embree`; the
 //! median is printed), or `build` (N builds, each called from a pool of `RAYON_NUM_THREADS` threads and
-//! timed by the wall clock, with the median and quartiles printed; counted by
+//! timed by the wall clock, with the median and quartiles printed; a fifth argument pauses that many
+//! milliseconds before each build, so that the pool's threads fall asleep; counted by
 //! `--toggle-collect=call_path::build_all`), and TRACER one of `native`, `native-avx2` (the walks compiled for AVX2), `native-mt` (the Moller-Trumbore test), `embree`, `embree-default` (MEDIUM quality).
 
 use std::path::Path;
@@ -161,8 +162,13 @@ fn main() -> rtdiff::Result<()> {
             #[cfg(not(feature = "embree"))]
             Err(rtdiff::Error::Invalid("Embree builds need --features embree".into()))
         };
+        // An optional pause before each build (fifth argument, milliseconds),
+        // during which the pool's threads fall asleep, as they do in the race
+        // while the other library builds on its own threads.
+        let pause = std::time::Duration::from_millis(args.get(4).and_then(|s| s.parse().ok()).unwrap_or(0));
         let mut ms = Vec::with_capacity(n);
         for _ in 0..n {
+            std::thread::sleep(pause);
             // Timed on the pool's thread, without the handoff to it.
             ms.push(pool.install(|| {
                 let start = std::time::Instant::now();
