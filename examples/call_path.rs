@@ -235,7 +235,7 @@ fn main() -> rtdiff::Result<()> {
     // `rtdiff bench --race --rtdiff-isa avx2`), for a CPU without AVX-512.
     let tracer: Box<dyn Tracer> = if which == "native-avx2" {
         let mut t = rtdiff::bvh::BvhTracer::new(&prims, &cfg);
-        if !t.force_isa(rtdiff::bvh::wide::WalkIsa::Avx2) {
+        if !t.force_isa(rtdiff::bvh::WalkIsa::Avx2) {
             return Err(rtdiff::Error::Invalid("this CPU does not run the AVX2 walks".into()));
         }
         Box::new(t)
