@@ -353,7 +353,28 @@ macro_rules! closest {
                 if mask != 0 {
                     if !made && mask & !node.inner_lanes() != 0 {
                         made = true;
-                        lr = shear::<$k>($ray);
+                        // The ray passes through `black_box`, so the
+                        // compiler cannot hoist the shear's axis choice and
+                        // permutation (about 25 instructions) out of the
+                        // loop into the walk's prologue, where every ray ran
+                        // them, also the many that enter no leaf's box.
+                        // Callgrind, 50,000 rays through `Tracer::intersect`
+                        // (the AVX2 walk): rays that leave the mesh's
+                        // bounds 252 -> 225 instructions (suzanne) and 247
+                        // -> 227 (dragon_87k), suzanne camera 688 -> 667 and
+                        // incoherent 657 -> 638, dragon_87k 973 -> 962 and
+                        // 989 -> 980. Both sides on AVX2 (`--race 5
+                        // --threads 1 --rtdiff-isa avx2 --embree-max-isa
+                        // avx2`, three alternated pairs) against default
+                        // MEDIUM: suzanne incoherent 0.920 / 0.932 / 0.926
+                        // -> 0.934 / 0.950 / 0.942, camera 1.149 / 1.196 /
+                        // 1.196 -> 1.175 / 1.203 / 1.232; dragon_87k and
+                        // the AVX-512 walk level. (The any-hit walk makes
+                        // the shear at its first node, which nearly every
+                        // shadow ray passes on to a leaf: there the hoisted
+                        // form costs nothing and the barrier measured 1.5%
+                        // more instructions on suzanne.)
+                        lr = shear::<$k>(std::hint::black_box($ray));
                     }
                     if $pf {
                         $self.prefetch_children(node, mask);
