@@ -1,7 +1,8 @@
 //! The one module that names every tracer backend and builds it: brute force
 //! ([`crate::accel::BruteForce`]), rtdiff's BVH ([`crate::bvh`], configured
-//! by [`BvhConfig`]) and Intel Embree ([`crate::embree`], configured by
-//! [`EmbreeQuality`]). [`crate::accel`] holds only the [`Tracer`] interface
+//! by [`BvhConfig`]), Intel Embree ([`crate::embree`], configured by
+//! [`EmbreeQuality`]) and tracers loaded from a plugin library
+//! ([`crate::plugin`], `--tracer plugin:PATH`). [`crate::accel`] holds only the [`Tracer`] interface
 //! and the brute-force oracle and imports no backend; each backend owns its
 //! configuration; this factory imports them all.
 
@@ -9,6 +10,8 @@ use std::sync::Arc;
 
 use clap::ValueEnum;
 use serde::{Deserialize, Serialize};
+
+pub use crate::plugin::PluginId;
 
 pub use crate::bvh::config::{BinaryOrder, Builder, BvhConfig, NodeLayout, Traversal};
 pub use crate::embree::quality::{EmbreeMode, EmbreeQuality, embree_label};
@@ -18,7 +21,7 @@ use crate::error::Result;
 use crate::geometry::{Hit, Primitives, Ray, TriangleTest};
 
 /// Where hits come from.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Backend {
     /// rtdiff's own BVH.
@@ -28,6 +31,48 @@ pub enum Backend {
     Brute,
     /// Intel Embree 4 (needs the `embree` cargo feature and scripts/setup-embree.sh).
     Embree,
+    /// A tracer from a shared library implementing `include/rtdiff_tracer.h` ([`crate::plugin::load`]).
+    Plugin(PluginId),
+}
+
+impl Backend {
+    /// The tracer named on the command line: `native`, `brute`, `embree`, or
+    /// `plugin:PATH` (the library is loaded and checked here; errors name it).
+    pub fn parse(s: &str) -> Result<Self> {
+        match s {
+            "native" => Ok(Backend::Native),
+            "brute" => Ok(Backend::Brute),
+            "embree" => Ok(Backend::Embree),
+            _ => match s.strip_prefix("plugin:") {
+                Some(path) if !path.is_empty() => Ok(Backend::Plugin(crate::plugin::load(std::path::Path::new(path))?)),
+                _ => Err(crate::error::Error::Invalid(format!(
+                    "unknown tracer '{s}' (expected native, brute, embree or plugin:PATH to a shared library)"
+                ))),
+            },
+        }
+    }
+}
+
+/// `--tracer` as clap reads it: checked for its form only; [`TracerArg::backend`] loads a plugin.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct TracerArg(pub String);
+
+impl TracerArg {
+    /// The backend this names (loading a plugin; errors name the library).
+    pub fn backend(&self) -> Result<Backend> {
+        Backend::parse(&self.0)
+    }
+}
+
+impl std::str::FromStr for TracerArg {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        if matches!(s, "native" | "brute" | "embree") || s.strip_prefix("plugin:").is_some_and(|p| !p.is_empty()) {
+            Ok(TracerArg(s.to_string()))
+        } else {
+            Err(format!("unknown tracer '{s}' (expected native, brute, embree or plugin:PATH to a shared library)"))
+        }
+    }
 }
 
 /// Full acceleration-structure configuration.
@@ -79,6 +124,7 @@ impl AccelConfig {
             Backend::Native => self.bvh().label(),
             Backend::Brute => format!("brute{}", self.triangle_test.label_suffix()),
             Backend::Embree => embree_label(self.embree_quality, self.embree_mode),
+            Backend::Plugin(id) => id.plugin().label(),
         }
     }
 }
@@ -99,9 +145,25 @@ impl Default for AccelConfig {
 }
 
 /// Build the tracer `cfg` asks for over `prims`, with the threads of the
-/// calling rayon pool (every backend).
+/// calling rayon pool (every backend). A plugin's hits are checked
+/// ([`crate::plugin::Checked`]: an invalid hit is a miss), so that a render
+/// never shades a primitive that does not exist; the harness judges the
+/// unchecked answers ([`build_tracer_unchecked`]).
 pub fn build_tracer(prims: Arc<Primitives>, cfg: &AccelConfig) -> Result<Box<dyn Tracer>> {
     match cfg.backend {
+        Backend::Plugin(id) => {
+            Ok(Box::new(crate::plugin::Checked::new(crate::plugin::PluginTracer::new(id, &prims)?, prims)))
+        }
+        _ => build_tracer_unchecked(prims, cfg),
+    }
+}
+
+/// [`build_tracer`], with a plugin's answers as it gives them (ids that name
+/// no primitive, distances outside the interval, NaN: [`Hit::fault`]), for
+/// the harness that judges them. The same tracer for every other backend.
+pub fn build_tracer_unchecked(prims: Arc<Primitives>, cfg: &AccelConfig) -> Result<Box<dyn Tracer>> {
+    match cfg.backend {
+        Backend::Plugin(id) => Ok(Box::new(crate::plugin::PluginTracer::new(id, &prims)?)),
         Backend::Brute => Ok(Box::new(BruteForce::new(prims, cfg.triangle_test))),
         Backend::Native => Ok(Box::new(crate::bvh::BvhTracer::new(&prims, cfg))),
         #[cfg(feature = "embree")]
@@ -120,10 +182,11 @@ pub fn build_tracer(prims: Arc<Primitives>, cfg: &AccelConfig) -> Result<Box<dyn
     }
 }
 
-/// Build the tracer `cfg` asks for over `prims` and find the closest hit of each of `rays`, in parallel.
+/// Build the tracer `cfg` asks for over `prims` and find the closest hit of each of `rays`, in parallel
+/// (a plugin's hits as it returns them: [`build_tracer_unchecked`]).
 pub fn trace_rays(prims: Arc<Primitives>, cfg: &AccelConfig, rays: &[Ray]) -> Result<Vec<Option<Hit>>> {
     use rayon::prelude::*;
-    let tracer = build_tracer(prims, cfg)?;
+    let tracer = build_tracer_unchecked(prims, cfg)?;
     Ok(rays.par_iter().map(|r| tracer.intersect(r)).collect())
 }
 

@@ -24,6 +24,7 @@ pub mod material;
 pub mod mesh;
 pub mod perf;
 pub mod pipeline;
+pub mod plugin;
 pub mod post;
 pub mod rays;
 pub mod render;

@@ -89,12 +89,12 @@ fn infinite_vertex() {
 }
 
 #[test]
-fn degenerate_triangles_are_skipped_with_a_warning() {
+fn zero_area_triangles_are_kept_with_a_warning() {
     let d = temp_dir("err-degenerate");
     let s = scene_with_mesh(&d, "degen.obj", &format!("{TRI}v 2 0 0\nf 1 2 4\n"));
     let (code, err) = render(&d, &s, &[]);
     assert_eq!(code, 0, "{err}");
-    assert!(err.contains("skipped 1 zero-area triangles"), "{err}");
+    assert!(err.contains("1 zero-area triangles (kept, so that primitive ids are triangle positions"), "{err}");
 }
 
 #[test]

@@ -11,3 +11,14 @@ pub mod render;
 pub mod report;
 pub mod trace;
 pub mod warnings;
+
+/// End the process with status 2 when a tracer failed its verdict (`parity`, `judge`), after
+/// the report is printed: 0 means pass, 1 an error, 2 a failing tracer.
+pub fn exit_on_fail(passed: bool) -> crate::error::Result<()> {
+    if !passed {
+        use std::io::Write;
+        let _ = std::io::stdout().flush();
+        std::process::exit(2);
+    }
+    Ok(())
+}

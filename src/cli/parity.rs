@@ -41,15 +41,22 @@ pub struct ParityArgs {
     /// Seed of the ray sets.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Print the report as JSON.
+    /// Print the report as JSON (the verdict, and every table of --verbose).
     #[arg(long)]
     pub json: bool,
+    /// Print every table: each set and tracer, the arbiter's lines, the stress report.
+    #[arg(long, short)]
+    pub verbose: bool,
     /// The reference tracer.
     #[arg(long, value_enum, default_value = "embree")]
     pub reference: Reference,
     /// Compare only the default native configuration instead of every builder x traversal.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "tracer")]
     pub default_only: bool,
+    /// The tracer under test instead of every native builder x traversal (repeatable): native,
+    /// brute, embree, or plugin:PATH (a shared library implementing include/rtdiff_tracer.h).
+    #[arg(long)]
+    pub tracer: Vec<crate::backends::TracerArg>,
     /// Rays per set for the builder x traversal variants other than the default
     /// `sah/fast` (which always sees every ray); 0 = all rays.
     #[arg(long, default_value_t = 10_000, value_parser = crate::limits::ranged::<usize>(0, crate::limits::MAX_RAYS as u64))]
@@ -79,7 +86,10 @@ pub fn run(args: &ParityArgs) -> Result<()> {
         max_examples: args.examples,
         arbiter: !args.no_arbiter,
         sweep_count: (args.sweep_count > 0).then_some(args.sweep_count),
-        variants: if args.default_only {
+        variants: if !args.tracer.is_empty() {
+            let backends = args.tracer.iter().map(|t| t.backend()).collect::<Result<Vec<_>>>()?;
+            backends.into_iter().map(|backend| crate::backends::AccelConfig { backend, ..Default::default() }).collect()
+        } else if args.default_only {
             vec![crate::backends::AccelConfig::default()]
         } else {
             parity::native_variants()
@@ -90,9 +100,18 @@ pub fn run(args: &ParityArgs) -> Result<()> {
         let s = serde_json::to_string_pretty(&report)
             .map_err(|e| crate::Error::Invalid(format!("cannot serialise the report: {e}")))?;
         println!("{s}");
-    } else {
+    } else if args.verbose {
         print!("{}", parity::format_report(&report));
         println!("{} in {:.2} s", args.scene.display(), report.seconds);
+    } else {
+        let reference = args.reference.config().label();
+        print!("{}", parity::format_verdict(&report, &reference, args.examples.max(1)));
+        println!(
+            "{}: {} sets in {:.2} s (--verbose: every table)",
+            args.scene.display(),
+            report.sets.len(),
+            report.seconds
+        );
     }
-    Ok(())
+    super::exit_on_fail(report.verdict.passed)
 }

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use crate::backends::{Backend, Builder, Traversal};
+use crate::backends::{Builder, TracerArg, Traversal};
 use crate::error::{Error, Result};
 use crate::geometry::TriangleTest;
 use crate::limits;
@@ -24,9 +24,10 @@ pub struct RenderArgs {
     /// Worker threads, 1 to 1024 (the image is identical for any count).
     #[arg(long, value_parser = limits::ranged::<usize>(1, limits::MAX_THREADS as u64))]
     pub threads: Option<usize>,
-    /// Hit provider.
+    /// Hit provider: native, brute, embree, or plugin:PATH (a shared library implementing
+    /// include/rtdiff_tracer.h; docs/plugins.md).
     #[arg(long)]
-    pub tracer: Option<Backend>,
+    pub tracer: Option<TracerArg>,
     /// BVH builder.
     #[arg(long)]
     pub builder: Option<Builder>,
@@ -109,7 +110,7 @@ impl RenderArgs {
     pub fn overrides(&self) -> Result<Overrides> {
         let args = self;
         Ok(Overrides {
-            backend: args.tracer,
+            backend: args.tracer.as_ref().map(TracerArg::backend).transpose()?,
             builder: args.builder,
             traversal: args.traversal,
             triangle_test: args.triangle_test,
@@ -131,8 +132,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             eprintln!("rtdiff: warning: {w}");
         }
     }
-    if scene.degenerate_skipped > 0 && !args.quiet {
-        eprintln!("rtdiff: warning: skipped {} zero-area triangles", scene.degenerate_skipped);
+    if !args.quiet {
+        super::warnings::degenerate(&args.scene, &scene.prims, scene.zero_area);
     }
     let out = crate::pipeline::render_scene(&scene, &RenderOptions { threads: args.threads, quiet: args.quiet })?;
     if let (true, Some(st)) = (args.bloom_stages, &out.bloom) {

@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use crate::backends::{AccelConfig, Backend, trace_rays};
+use crate::backends::{AccelConfig, TracerArg, trace_rays};
 use crate::error::Result;
 use crate::rays::file::{read_rays, write_hits};
 
@@ -19,17 +19,19 @@ pub struct TraceArgs {
     /// Where to write the hits, CSV: hit,t,prim,u,v.
     #[arg(long)]
     pub out: PathBuf,
-    /// Tracer backend.
-    #[arg(long, value_enum, default_value = "native")]
-    pub tracer: Backend,
+    /// Tracer: native, brute, embree, or plugin:PATH (a shared library implementing
+    /// include/rtdiff_tracer.h; its hits are written as it returns them).
+    #[arg(long, default_value = "native")]
+    pub tracer: TracerArg,
 }
 
 /// Run `rtdiff trace`.
 pub fn run(args: &TraceArgs) -> Result<()> {
     let (ctx, skipped) = crate::rays::load_context_counted(&args.scene)?;
     super::warnings::degenerate(&args.scene, &ctx.prims, skipped);
+    let backend = args.tracer.backend()?;
     let rays = read_rays(&args.rays)?;
-    let hits = trace_rays(ctx.prims, &AccelConfig { backend: args.tracer, ..Default::default() }, &rays)?;
+    let hits = trace_rays(ctx.prims, &AccelConfig { backend, ..Default::default() }, &rays)?;
     write_hits(&args.out, &hits)?;
     eprintln!("{} rays, {} hits -> {}", rays.len(), hits.iter().flatten().count(), args.out.display());
     Ok(())

@@ -4,18 +4,26 @@ use std::path::Path;
 
 use crate::geometry::Primitives;
 
-/// Warn about zero-area triangles dropped while loading `scene`, and loudly
-/// when nothing is left to hit (every triangle degenerate, no sphere).
-pub fn degenerate(scene: &Path, prims: &Primitives, skipped: usize) {
-    if skipped == 0 {
-        return;
+/// The warning about `count` zero-area triangles in `scene`, if any: they are kept in
+/// place (primitive ids are triangle positions in the file) and no ray hits them; loudly
+/// when nothing else is left to hit.
+pub fn zero_area_message(scene: &Path, prims: &Primitives, count: usize) -> Option<String> {
+    if count == 0 {
+        return None;
     }
-    if prims.triangles.is_empty() && prims.spheres.is_empty() {
-        eprintln!(
-            "rtdiff: warning: {}: all {skipped} triangles have zero area and were skipped: every ray misses",
-            scene.display()
-        );
+    Some(if count == prims.triangles.len() && prims.spheres.is_empty() {
+        format!("{}: all {count} triangles have zero area: every ray misses", scene.display())
     } else {
-        eprintln!("rtdiff: warning: {}: skipped {skipped} zero-area triangles", scene.display());
+        format!(
+            "{}: {count} zero-area triangles (kept, so that primitive ids are triangle positions in the file; no ray hits them)",
+            scene.display()
+        )
+    })
+}
+
+/// Print [`zero_area_message`] on stderr.
+pub fn degenerate(scene: &Path, prims: &Primitives, count: usize) {
+    if let Some(m) = zero_area_message(scene, prims, count) {
+        eprintln!("rtdiff: warning: {m}");
     }
 }

@@ -31,3 +31,50 @@ impl Hit {
         }
     }
 }
+
+/// Why a hit reported by a tracer rtdiff did not write is no hit at all (see
+/// [`Hit::fault`]): the harness judges such an answer wrong and names the ray.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum HitFault {
+    /// The primitive id names no primitive of the scene.
+    NoSuchPrimitive,
+    /// The distance is NaN or infinite.
+    DistanceNotFinite,
+    /// The distance lies outside the ray's interval `[t_min, t_max]`.
+    OutsideInterval,
+    /// `u` or `v` is NaN or infinite.
+    BarycentricsNotFinite,
+}
+
+impl HitFault {
+    /// Lower-case name, the class of the verdict.
+    pub fn name(self) -> &'static str {
+        match self {
+            HitFault::NoSuchPrimitive => "no-such-primitive",
+            HitFault::DistanceNotFinite => "t-not-finite",
+            HitFault::OutsideInterval => "t-outside-interval",
+            HitFault::BarycentricsNotFinite => "uv-not-finite",
+        }
+    }
+}
+
+impl Hit {
+    /// What is wrong with this hit of `ray` in a scene of `prim_count`
+    /// primitives, if anything: an id out of range, a distance that is not
+    /// finite or lies outside `[t_min, t_max]` (closed; compared exactly), `u` or
+    /// `v` not finite. rtdiff's own tracers never return such a hit.
+    pub fn fault(&self, ray: &super::Ray, prim_count: usize) -> Option<HitFault> {
+        if self.prim as usize >= prim_count {
+            Some(HitFault::NoSuchPrimitive)
+        } else if !self.t.is_finite() {
+            Some(HitFault::DistanceNotFinite)
+        } else if self.t < ray.t_min || self.t > ray.t_max {
+            Some(HitFault::OutsideInterval)
+        } else if !self.u.is_finite() || !self.v.is_finite() {
+            Some(HitFault::BarycentricsNotFinite)
+        } else {
+            None
+        }
+    }
+}

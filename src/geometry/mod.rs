@@ -13,7 +13,7 @@ pub mod sphere;
 pub mod triangle;
 
 pub use aabb::Aabb;
-pub use hit::Hit;
+pub use hit::{Hit, HitFault};
 pub use interaction::SurfaceInteraction;
 pub use normalize::{normalize_to_unit_sphere, scaled_length, unit_or_zero};
 pub use primitives::{Prim, Primitives, Triangle};

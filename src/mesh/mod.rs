@@ -50,8 +50,9 @@ pub fn is_mesh_file(path: &Path) -> bool {
 }
 
 /// Load the mesh at `path` (OBJ or PLY, optionally gzip-compressed). Faces are triangulated
-/// as fans from their first vertex; zero-area triangles are dropped and counted in
-/// [`Mesh::degenerate_skipped`]. Errors name the file and, for text, the line and token;
+/// as fans from their first vertex, in file order: triangle `i` of [`Mesh::indices`] is the
+/// `i`-th triangle of the file, which is its primitive id in every output. Zero-area triangles
+/// are kept in place (no ray hits them) and counted in [`Mesh::zero_area`]. Errors name the file and, for text, the line and token;
 /// problems with materials are [`Mesh::warnings`], never errors.
 pub fn load_mesh(path: &Path, content: Content) -> Result<Mesh> {
     if let Err(e) = std::fs::metadata(path) {
@@ -127,21 +128,21 @@ pub struct Mesh {
     pub file_normals: bool,
     /// Per-vertex texture coordinates, if the file has them.
     pub uvs: Option<Vec<Vec2>>,
-    /// Triangles (degenerate ones already removed).
+    /// Triangles in file order (faces fanned from their first vertex), zero-area ones included.
     pub indices: Vec<[u32; 3]>,
     /// Per-triangle index into `materials`.
     pub face_material: Vec<Option<u32>>,
     /// Materials from the MTL library.
     pub materials: Vec<MtlMaterial>,
-    /// Number of zero-area triangles that were dropped.
-    pub degenerate_skipped: usize,
+    /// Number of zero-area triangles among `indices` (kept, so that ids stay file positions).
+    pub zero_area: usize,
     /// Problems that did not stop the load, each `file:line: what` (materials, mixed faces).
     pub warnings: Vec<String>,
 }
 
 impl Mesh {
     /// Build a mesh from positions and triangles (no normals or uvs given):
-    /// validates coordinates, drops degenerate triangles and computes vertex normals.
+    /// validates coordinates, counts zero-area triangles and computes vertex normals.
     pub fn from_triangles(path: &Path, positions: Vec<Vec3>, indices: Vec<[u32; 3]>) -> Result<Self> {
         let mut m = Mesh { positions, indices, ..Default::default() };
         m.face_material = vec![None; m.indices.len()];
@@ -150,7 +151,7 @@ impl Mesh {
         Ok(m)
     }
 
-    /// Validate, drop degenerate triangles, and take `file_normals` (indexed like
+    /// Validate, count zero-area triangles, and take `file_normals` (indexed like
     /// `positions`) where they are finite and non-zero; elsewhere, and when there are none,
     /// area-weighted face normals.
     pub(crate) fn finish(&mut self, path: &Path, file_normals: Option<Vec<Vec3>>) -> Result<()> {
@@ -178,19 +179,8 @@ impl Mesh {
         if let Some(f) = self.indices.iter().position(|t| t.iter().any(|&i| i >= n)) {
             return Err(Error::file(path, format!("face {} refers to a vertex that does not exist", f + 1)));
         }
-        let before = self.indices.len();
-        let mut keep_mat = Vec::with_capacity(before);
-        let mut keep = Vec::with_capacity(before);
-        for (t, m) in self.indices.iter().zip(&self.face_material) {
-            let [a, b, c] = t.map(|i| self.positions[i as usize]);
-            if (b - a).cross(c - a) != Vec3::ZERO {
-                keep.push(*t);
-                keep_mat.push(*m);
-            }
-        }
-        self.degenerate_skipped = before - keep.len();
-        self.indices = keep;
-        self.face_material = keep_mat;
+        // Zero-area triangles stay where they are: a triangle's id is its position in the file.
+        self.zero_area = self.indices.iter().filter(|t| zero_area(t.map(|i| self.positions[i as usize]))).count();
         if let Some(uvs) = &self.uvs
             && let Some(i) = uvs.iter().position(|t| !t.is_finite())
         {
@@ -237,6 +227,12 @@ impl Mesh {
     }
 }
 
+/// True when the triangle `[a, b, c]` has zero area as computed in single precision
+/// (`(b - a) x (c - a) = 0`): the triangles rtdiff counts and warns about.
+pub fn zero_area([a, b, c]: [Vec3; 3]) -> bool {
+    (b - a).cross(c - a) == Vec3::ZERO
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -257,10 +253,13 @@ mod tests {
     }
 
     #[test]
-    fn degenerate_triangles_are_skipped_and_counted() {
-        let p = write("degen.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nf 1 2 4\n");
+    fn zero_area_triangles_keep_their_place_and_are_counted() {
+        let p = write("degen.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 4\nf 1 2 3\n");
         let m = load_mesh(&p, Content::WithMaterials).unwrap();
-        assert_eq!((m.indices.len(), m.degenerate_skipped), (1, 1));
+        let corners: Vec<[Vec3; 3]> = m.indices.iter().map(|t| t.map(|i| m.positions[i as usize])).collect();
+        let (a, b, c, d) = (Vec3::ZERO, Vec3::X, Vec3::Y, 2.0 * Vec3::X);
+        assert_eq!(corners, vec![[a, b, d], [a, b, c]], "file order, the zero-area triangle first");
+        assert_eq!(m.zero_area, 1);
     }
 
     #[test]

@@ -34,16 +34,17 @@ pub fn load_normalized_mesh(path: &Path) -> Result<Arc<Primitives>> {
     load_normalized_mesh_counted(path).map(|(prims, _)| prims)
 }
 
-/// [`load_normalized_mesh`], also returning the number of zero-area triangles dropped while loading.
+/// [`load_normalized_mesh`], also returning the number of zero-area triangles among its triangles
+/// (kept in place, so that primitive ids are triangle positions in the file).
 pub fn load_normalized_mesh_counted(path: &Path) -> Result<(Arc<Primitives>, usize)> {
     let mut mesh = crate::mesh::load_mesh(path, crate::mesh::Content::Geometry)?;
     crate::geometry::normalize_to_unit_sphere(&mut mesh.positions);
-    // A mesh whose every triangle has zero area loads empty: the caller warns with the count
-    // (`trace`, `parity`); a mesh with no triangles at all is an error.
-    if mesh.indices.is_empty() && mesh.degenerate_skipped == 0 {
+    // A mesh whose every triangle has zero area loads (nothing can be hit): the caller warns
+    // with the count (`trace`, `parity`); a mesh with no triangles at all is an error.
+    if mesh.indices.is_empty() {
         return Err(Error::file(path, "the mesh has no triangles"));
     }
-    Ok((Arc::new(mesh.to_primitives()), mesh.degenerate_skipped))
+    Ok((Arc::new(mesh.to_primitives()), mesh.zero_area))
 }
 
 /// The scene a harness command runs on: a scene file (`.json`, through
@@ -54,7 +55,7 @@ pub fn load_context(path: &Path) -> Result<RayContext> {
     load_context_counted(path).map(|(ctx, _)| ctx)
 }
 
-/// [`load_context`], also returning the number of zero-area triangles dropped while loading.
+/// [`load_context`], also returning the number of zero-area triangles (kept in place).
 pub fn load_context_counted(path: &Path) -> Result<(RayContext, usize)> {
     let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
     match ext.as_deref() {
@@ -64,7 +65,7 @@ pub fn load_context_counted(path: &Path) -> Result<(RayContext, usize)> {
         }
         Some("json") => {
             let scene = crate::scene::Scene::load(path)?;
-            let skipped = scene.degenerate_skipped;
+            let skipped = scene.zero_area;
             let camera = scene.camera.clone();
             let lights = Arc::new(scene.lights);
             let ctx = RayContext {
@@ -93,16 +94,16 @@ pub fn load_primitives(path: &Path, normalize: bool) -> Result<Arc<Primitives>> 
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match ext.as_deref() {
         _ if normalize && crate::mesh::is_mesh_file(path) => {
-            let prims = load_normalized_mesh(path)?;
-            if prims.triangles.is_empty() {
-                return Err(Error::file(path, "the mesh has no (non-degenerate) triangles"));
+            let (prims, zero_area) = load_normalized_mesh_counted(path)?;
+            if zero_area == prims.triangles.len() {
+                return Err(Error::file(path, "the mesh has no triangles of non-zero area"));
             }
             Ok(prims)
         }
         _ if crate::mesh::is_mesh_file(path) => {
             let mesh = crate::mesh::load_mesh(path, crate::mesh::Content::Geometry)?;
-            if mesh.indices.is_empty() {
-                return Err(Error::file(path, "the mesh has no (non-degenerate) triangles"));
+            if mesh.zero_area == mesh.indices.len() {
+                return Err(Error::file(path, "the mesh has no triangles of non-zero area"));
             }
             Ok(Arc::new(mesh.to_primitives()))
         }

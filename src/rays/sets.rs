@@ -254,7 +254,8 @@ fn generate_one(ctx: &RayContext, kind: SetKind, name: String, seed: u64, count:
     let mut tags = Vec::with_capacity(count);
     let (w, h) = ctx.image;
     let camera_ray = |rng: &mut Rng| (ctx.camera)(rng.f32() * w as f32, rng.f32() * h as f32);
-    let nt = prims.triangles.len();
+    // Triangles of non-zero area (zero-area ones keep their ids but are no part of the surface).
+    let live = || (0..prims.triangles.len()).filter(|&i| prims.triangles[i].normal() != Vec3::ZERO);
     // Generators that may fail to produce a ray (misses, empty topology) stop
     // after this many attempts, so a degenerate scene gives a short set.
     let max_attempts = 20 * count + 1000;
@@ -321,10 +322,11 @@ fn generate_one(ctx: &RayContext, kind: SetKind, name: String, seed: u64, count:
             }
         }
         SetKind::Grazing => {
-            if nt > 0 {
+            let live: Vec<usize> = live().collect();
+            if !live.is_empty() {
                 while rays.len() < count && attempts < max_attempts {
                     attempts += 1;
-                    let tri = prims.triangles[rng.below(nt)];
+                    let tri = prims.triangles[live[rng.below(live.len())]];
                     let nrm = crate::geometry::unit_or_zero(tri.normal());
                     if nrm == Vec3::ZERO {
                         continue;
@@ -345,7 +347,7 @@ fn generate_one(ctx: &RayContext, kind: SetKind, name: String, seed: u64, count:
             }
         }
         SetKind::Axis => {
-            let verts: Vec<Vec3> = prims.triangles.iter().flat_map(|t| t.v).collect();
+            let verts: Vec<Vec3> = live().flat_map(|i| prims.triangles[i].v).collect();
             let big = Aabb::new(bounds.min - 0.1 * bounds.extent(), bounds.max + 0.1 * bounds.extent());
             for _ in 0..count {
                 let a = rng.below(3);

@@ -38,7 +38,9 @@ impl Topology {
         let mut edges: HashMap<(u32, u32), Vec<(u32, bool)>> = HashMap::new();
         let mut fans: Vec<Vec<u32>> = vec![Vec::new(); pos.len()];
         for (i, t) in tris.iter().enumerate() {
-            if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
+            // Zero-area triangles (kept in the primitives so that ids are file positions) are
+            // no part of the surface.
+            if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || prims.triangles[i].normal() == Vec3::ZERO {
                 continue;
             }
             for k in 0..3 {

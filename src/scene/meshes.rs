@@ -44,8 +44,8 @@ pub(crate) struct MeshTriangles {
     pub triangles: Vec<Triangle>,
     /// Shading data, one per triangle.
     pub shading: Vec<TriangleShading>,
-    /// Zero-area triangles dropped, summed over the entries.
-    pub degenerate_skipped: usize,
+    /// Zero-area triangles (kept in place), summed over the entries.
+    pub zero_area: usize,
     /// Problems in the mesh files that did not stop the load (each file's once).
     pub warnings: Vec<String>,
 }
@@ -67,7 +67,7 @@ pub(crate) fn load_meshes(
         if fresh {
             out.warnings.extend(file_mesh.warnings.iter().cloned());
         }
-        out.degenerate_skipped += file_mesh.degenerate_skipped;
+        out.zero_area += file_mesh.zero_area;
         let what = format!("meshes[{mi}] ({})", spec.file);
         validate::check_primitive_total(path, &what, out.triangles.len(), file_mesh.indices.len())?;
         let mut mesh = Mesh::clone(&file_mesh);

@@ -70,8 +70,8 @@ pub struct Scene {
     pub params: Params,
     /// Acceleration structure to build.
     pub accel: AccelConfig,
-    /// Zero-area triangles dropped while loading.
-    pub degenerate_skipped: usize,
+    /// Zero-area triangles among the meshes' triangles (kept in place: ids are file positions).
+    pub zero_area: usize,
     /// Problems in the mesh files that did not stop the load (`file:line: what`).
     pub warnings: Vec<String>,
 }
@@ -139,7 +139,7 @@ impl Scene {
             features: file.features,
             params: file.params,
             accel: file.accel.resolve(&file.features),
-            degenerate_skipped: meshes.degenerate_skipped,
+            zero_area: meshes.zero_area,
             warnings: meshes.warnings,
         })
     }

@@ -12,6 +12,7 @@ use serde::Serialize;
 
 use super::arbiter::{Arbiter, ArbiterClass, K_TRACER, Truth, Verdict, replay_line};
 use super::classify::{Answers, heuristic_class};
+use crate::geometry::Hit;
 use crate::rays::RaySet;
 
 /// Exact answers already computed for a set, by ray index (shared by the
@@ -110,7 +111,9 @@ pub fn arbitrate(
     max_replays: usize,
 ) -> ArbiterStats {
     let n = ours.hits.len().min(reference.hits.len());
+    // Hits that are no hits ([`Hit::fault`]) are counted by `compare`, not judged here.
     let disagree: Vec<usize> = (0..n)
+        .filter(|&i| ours.hits[i].is_none_or(|h| h.fault(&set.rays[i], set.prims.len()).is_none()))
         .filter(|&i| match (&ours.hits[i], &reference.hits[i]) {
             (None, None) => false,
             (Some(a), Some(b)) => a.prim != b.prim,
@@ -122,8 +125,13 @@ pub fn arbitrate(
         .map(|&i| {
             let ray = &set.rays[i];
             let truth = cache.get(arbiter, set, i);
-            let vn = arbiter.judge(ray, &truth, ours.hits[i].map(|h| h.prim));
-            let vr = arbiter.judge(ray, &truth, reference.hits[i].map(|h| h.prim));
+            // A hit that is no hit ([`Hit::fault`]) is wrong without evaluation (its id may name nothing).
+            let judge = |h: Option<Hit>| match h {
+                Some(h) if h.fault(ray, set.prims.len()).is_some() => Verdict::Wrong,
+                h => arbiter.judge(ray, &truth, h.map(|h| h.prim)),
+            };
+            let vn = judge(ours.hits[i]);
+            let vr = judge(reference.hits[i]);
             (i, truth, vn, vr)
         })
         .collect();
@@ -143,10 +151,15 @@ pub fn arbitrate(
         if well && vr != Verdict::Exact {
             *s.reference_well_conditioned.entry(verdict_name(vr).into()).or_default() += 1;
         }
-        let heuristic =
-            heuristic_class(ray, set.tags[i], &ours.hits[i], &reference.hits[i], &set.prims).unwrap_or("none");
+        let faulty = |h: &Option<Hit>| h.and_then(|h| h.fault(ray, set.prims.len()));
+        let heuristic = match (faulty(&ours.hits[i]), faulty(&reference.hits[i])) {
+            (Some(f), _) | (None, Some(f)) => f.name(),
+            _ => heuristic_class(ray, set.tags[i], &ours.hits[i], &reference.hits[i], &set.prims).unwrap_or("none"),
+        };
         *s.heuristic_check.entry(format!("{heuristic}>{}", class.name())).or_default() += 1;
-        s.heuristic_misses += (vn == Verdict::Wrong && !matches!(heuristic, "unclassified" | "leak")) as u64;
+        s.heuristic_misses += (vn == Verdict::Wrong
+            && faulty(&ours.hits[i]).is_none()
+            && !matches!(heuristic, "unclassified" | "leak")) as u64;
         // Every ray where the tracer is not exact on a well-conditioned ray,
         // and the first `max_replays` ill-conditioned ones.
         let shown_ill = s.replays.iter().filter(|r| r.class == ArbiterClass::IllConditioned).count();

@@ -144,6 +144,14 @@ pub fn compare(label: &str, set: &RaySet, ours: Answers, reference: Answers, max
     for i in 0..set.rays.len() {
         let ray = &set.rays[i];
         let tag = set.tags[i];
+        // A hit that is no hit at all (an id naming no primitive, a distance outside the
+        // interval, NaN) is wrong whatever the reference says, and nothing else is asked of it.
+        if let Some(f) = hits[i].and_then(|h| h.fault(ray, prims.len())) {
+            s.invalid += 1;
+            *s.invalid_classes.entry(f.name().to_string()).or_default() += 1;
+            example(&mut s, i, &format!("invalid hit ({})", f.name()));
+            continue;
+        }
         if is_leak(ray, tag, &hits[i], prims) {
             s.leaks += 1;
         }
@@ -190,6 +198,7 @@ pub fn compare(label: &str, set: &RaySet, ours: Answers, reference: Answers, max
                 rel.push(r);
                 s.dist_rel_max = s.dist_rel_max.max(r);
                 s.dist_bound_ratio_max = s.dist_bound_ratio_max.max(dt / tb);
+                let mut beyond = dt > tb;
                 if dt > tb {
                     s.dist_over_bound += 1;
                     example(&mut s, i, "distance beyond the error bound");
@@ -200,9 +209,11 @@ pub fn compare(label: &str, set: &RaySet, ours: Answers, reference: Answers, max
                     s.bary_bound_ratio_max = s.bary_bound_ratio_max.max(db / bb);
                     if db > bb {
                         s.bary_over_bound += 1;
+                        beyond = true;
                         example(&mut s, i, "barycentrics beyond the error bound");
                     }
                 }
+                s.beyond_bound += beyond as u64;
             }
         }
     }

@@ -70,6 +70,14 @@ pub struct VariantStats {
     pub bary_over_bound: u64,
     /// Largest ratio of barycentric difference to its bound.
     pub bary_bound_ratio_max: f64,
+    /// Rays on the reference's primitive whose distance or barycentrics lie beyond their bounds.
+    pub beyond_bound: u64,
+    /// Hits that are no hits at all ([`crate::geometry::Hit::fault`]: a primitive
+    /// that does not exist, a distance outside the interval or not finite, NaN
+    /// barycentrics): wrong on every ray, not compared further.
+    pub invalid: u64,
+    /// `invalid` by fault (`no-such-primitive`, `t-outside-interval`, `t-not-finite`, `uv-not-finite`).
+    pub invalid_classes: BTreeMap<String, u64>,
     /// First disagreeing rays.
     pub examples: Vec<Example>,
     /// The exact arbiter's judgement of every disagreement (when run).
@@ -136,6 +144,8 @@ pub struct ParityReport {
     pub stress_tracers: [String; 3],
     /// Wall-clock seconds of the whole run (sets, tracers, arbiter and stress report).
     pub seconds: f64,
+    /// Pass or fail, per tracer and set ([`super::verdict`]).
+    pub verdict: super::verdict::Verdict,
 }
 
 /// The report as a plain-text table.

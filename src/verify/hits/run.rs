@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::accel::Tracer;
-use crate::backends::{AccelConfig, Backend, build_tracer, native_variants};
+use crate::backends::{AccelConfig, Backend, build_tracer_unchecked as build_tracer, native_variants};
 use crate::geometry::{Hit, Primitives, Ray, TriangleTest};
 use crate::rays::{self, RayContext, RaySet, RayTag, SetKind};
 
@@ -226,13 +226,16 @@ pub fn run(ctx: &RayContext, opts: &ParityOptions) -> crate::Result<ParityReport
             sets_out.push(report);
         }
     }
-    Ok(ParityReport {
+    let mut report = ParityReport {
         count: opts.count,
         sets: sets_out,
         stress,
         stress_tracers: ["watertight".into(), "moller-trumbore".into(), ref_label],
         seconds: start.elapsed().as_secs_f64(),
-    })
+        verdict: Default::default(),
+    };
+    report.verdict = super::verdict::Verdict::of(&report);
+    Ok(report)
 }
 
 #[cfg(test)]
