@@ -36,6 +36,16 @@ say "mitsuba: setting up the Python environment"
 scripts/mitsuba/setup.sh >&2
 export RTDIFF_REQUIRE_PYTHON=1
 
+# Tracers rtdiff did not write (tests/plugins.rs): the third-party BVH libraries wrapped in
+# plugins/ (tinybvh, obvhs), and Embree's default mode as a program (the embreex wheel in .venv/).
+say "plugins: building plugins/ (tinybvh, obvhs)"
+cargo build --release --locked --quiet --manifest-path plugins/Cargo.toml
+if ! cmp -s scripts/program/requirements.txt .venv/.rtdiff-program-requirements 2>/dev/null; then
+    say "program path: installing scripts/program/requirements.txt into .venv"
+    .venv/bin/python -m pip install --quiet --disable-pip-version-check -r scripts/program/requirements.txt
+    cp scripts/program/requirements.txt .venv/.rtdiff-program-requirements
+fi
+
 say "cargo test ${features[*]:-}"
 log="$(mktemp)"
 trap 'rm -f "$log"' EXIT

@@ -28,6 +28,12 @@ enum Command {
     /// Trace rays from a CSV file and write the hits as CSV.
     #[command(after_help = rtdiff::limits::HELP)]
     Trace(rtdiff::cli::trace::TraceArgs),
+    /// Write rtdiff's ray sets (adversarial ones too) as a ray file for a tracer it cannot link.
+    #[command(after_help = rtdiff::limits::HELP)]
+    Rays(rtdiff::cli::rays::RaysArgs),
+    /// Judge another tracer's hits for a ray file (bounds, exact arbiter, verdict; exit 2 on a wrong hit).
+    #[command(after_help = rtdiff::limits::HELP)]
+    Judge(rtdiff::cli::judge::JudgeArgs),
     /// Export a scene for Mitsuba 3 (the image oracle): scene.xml, PLY meshes, textures.
     Export(rtdiff::cli::export::ExportArgs),
     /// Write the performance table, convergence and stability reports (JSON, Markdown, SVG, index.html).
@@ -55,6 +61,8 @@ fn main() {
         Command::Bench(a) => rtdiff::cli::bench::run(a),
         Command::Parity(a) => rtdiff::cli::parity::run(a),
         Command::Trace(a) => rtdiff::cli::trace::run(a),
+        Command::Rays(a) => rtdiff::cli::rays::run(a),
+        Command::Judge(a) => rtdiff::cli::judge::run(a),
         Command::Export(a) => rtdiff::cli::export::run(a),
         Command::Report(a) => rtdiff::cli::report::run(a),
         Command::Compare(a) => rtdiff::cli::compare::run(a),

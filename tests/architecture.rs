@@ -25,6 +25,7 @@ const PIPELINE: &[&str] = &[
     "accel",
     "bvh",
     "embree",
+    "plugin",
     "integrator",
     "render",
     "film",
@@ -45,7 +46,7 @@ const FOUNDATION: &[&str] = &["error", "limits", "features", "rng", "sampler", "
 const BESIDE: &[&str] = &["rays", "verify", "perf", "report", "cli", "fuzz", "debug"];
 
 /// The tracer backends and their factory, which `accel/` must not import.
-const BACKENDS: &[&str] = &["bvh", "embree", "backends"];
+const BACKENDS: &[&str] = &["bvh", "embree", "plugin", "backends"];
 
 /// Rendering and measuring logic that `cli/` reaches only through library entry points.
 const CLI_FORBIDDEN: &[&str] = &[

@@ -47,7 +47,7 @@ fn trace_writes_hits_and_bad_input_exits_non_zero() {
     let text = std::fs::read_to_string(&out).unwrap();
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines[0], "hit,t,prim,u,v");
-    // The quad is normalised to the unit sphere (scale 1/sqrt(2)): z stays 0.
+    // The quad in the file's coordinates (z = 0; normalised it would be too).
     assert!(lines[1].starts_with("1,2,"), "{text}");
     assert_eq!(lines[2], "0,,,,");
 

@@ -11,8 +11,12 @@ use crate::rays::file::{read_rays, write_hits};
 /// Arguments of `rtdiff trace`.
 #[derive(clap::Args, Debug)]
 pub struct TraceArgs {
-    /// Scene: a scene .json file, or a mesh: .obj, .ply, optionally .gz (normalised to the unit sphere, like `rtdiff parity`).
+    /// Scene: a scene .json file, or a mesh: .obj, .ply, optionally .gz, in the file's own coordinates
+    /// (as `rtdiff rays` and `rtdiff judge` take it; --normalize: on the unit sphere, as `rtdiff parity`).
     pub scene: PathBuf,
+    /// Normalise a mesh to the unit sphere first, as `rtdiff parity` and `rtdiff bench` do.
+    #[arg(long)]
+    pub normalize: bool,
     /// Rays, CSV: ox,oy,oz,dx,dy,dz,tnear,tfar.
     #[arg(long)]
     pub rays: PathBuf,
@@ -27,7 +31,11 @@ pub struct TraceArgs {
 
 /// Run `rtdiff trace`.
 pub fn run(args: &TraceArgs) -> Result<()> {
-    let (ctx, skipped) = crate::rays::load_context_counted(&args.scene)?;
+    let (ctx, skipped) = if args.normalize {
+        crate::rays::load_context_counted(&args.scene)?
+    } else {
+        crate::rays::load_context_file_coordinates(&args.scene)?
+    };
     super::warnings::degenerate(&args.scene, &ctx.prims, skipped);
     let backend = args.tracer.backend()?;
     let rays = read_rays(&args.rays)?;

@@ -12,16 +12,23 @@ use glam::{DVec3, Vec3};
 /// vertices summed in f32 would lose about 3 significant digits) and each
 /// vertex is rounded to f32 once, at the end.
 pub fn normalize_to_unit_sphere(positions: &mut [Vec3]) {
+    let Some((c, s)) = unit_sphere_map(positions) else { return };
+    for p in positions {
+        *p = ((p.as_dvec3() - c) * s).as_vec3();
+    }
+}
+
+/// The map of [`normalize_to_unit_sphere`], `p -> (p - c) s`, as `(c, s)`: `c` the mean of
+/// the positions, `s` one over the largest distance from it (1 when that is 0); `None`
+/// without positions.
+pub fn unit_sphere_map(positions: &[Vec3]) -> Option<(DVec3, f64)> {
     if positions.is_empty() {
-        return;
+        return None;
     }
     let sum = positions.iter().fold(DVec3::ZERO, |a, p| a + p.as_dvec3());
     let c = sum / positions.len() as f64;
     let r = positions.iter().map(|p| (p.as_dvec3() - c).length()).fold(0.0, f64::max);
-    let s = if r > 0.0 { 1.0 / r } else { 1.0 };
-    for p in positions {
-        *p = ((p.as_dvec3() - c) * s).as_vec3();
-    }
+    Some((c, if r > 0.0 { 1.0 / r } else { 1.0 }))
 }
 
 /// `2^-e` for the exponent `e` of `m` (`2^e <= m < 2^(e+1)`), `m` finite and

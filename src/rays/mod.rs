@@ -88,6 +88,40 @@ pub fn load_context_counted(path: &Path) -> Result<(RayContext, usize)> {
     }
 }
 
+/// [`load_context_counted`] in the coordinates of the file, for tracers that read it
+/// themselves (`rtdiff rays`, `rtdiff judge`, `rtdiff trace --file-coordinates`): a mesh
+/// keeps its vertices as written (not normalised), with the default camera and light of
+/// [`RayContext::with_defaults`] carried from the unit sphere into the file's coordinates
+/// (the inverse of [`crate::geometry::normalize::unit_sphere_map`]); a scene file is
+/// what [`load_context_counted`] gives.
+pub fn load_context_file_coordinates(path: &Path) -> Result<(RayContext, usize)> {
+    if !crate::mesh::is_mesh_file(path) {
+        return load_context_counted(path);
+    }
+    let mesh = crate::mesh::load_mesh(path, crate::mesh::Content::Geometry)?;
+    if mesh.indices.is_empty() {
+        return Err(Error::file(path, "the mesh has no triangles"));
+    }
+    let (c, s) = crate::geometry::normalize::unit_sphere_map(&mesh.positions).expect("a mesh with triangles");
+    let unit = RayContext::with_defaults(Arc::new(Primitives::default()));
+    let to_file = move |p: glam::Vec3| (p.as_dvec3() / s + c).as_vec3();
+    let cam = unit.camera.clone();
+    let camera: CameraFn = Arc::new(move |x, y| {
+        let r = cam(x, y);
+        crate::geometry::Ray::with_range(to_file(r.origin), r.dir, r.t_min / s as f32, r.t_max / s as f32)
+    });
+    let lights = unit
+        .lights
+        .iter()
+        .map(|l| {
+            let l = l.clone();
+            Arc::new(move |u, v| to_file(l(u, v))) as LightFn
+        })
+        .collect();
+    let ctx = RayContext { prims: Arc::new(mesh.to_primitives()), camera, image: unit.image, lights };
+    Ok((ctx, mesh.zero_area))
+}
+
 /// Load the primitives of `path`: a mesh (`.obj`, `.ply`, optionally `.gz`; with `normalize`, through
 /// [`load_normalized_mesh`]; otherwise as is), anything else as a scene file.
 pub fn load_primitives(path: &Path, normalize: bool) -> Result<Arc<Primitives>> {

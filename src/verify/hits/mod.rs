@@ -12,6 +12,7 @@ pub mod bounds;
 pub mod classify;
 pub mod condition;
 pub mod exact;
+pub mod judge;
 pub mod line_index;
 pub mod report;
 pub mod run;
