@@ -38,6 +38,8 @@ enum Command {
     Export(rtdiff::cli::export::ExportArgs),
     /// Write the performance table, convergence and stability reports (JSON, Markdown, SVG, index.html).
     Report(rtdiff::cli::report::ReportArgs),
+    /// Check another renderer's image of a reference scene against reference/ (exit 2 when it fails).
+    CheckImage(rtdiff::cli::check_image::CheckImageArgs),
     /// Compare two images (EXR or PNG): MAE, RMSE, relMSE, PSNR, max error, pixels over thresholds, FLIP.
     Compare(rtdiff::cli::compare::CompareArgs),
 }
@@ -66,6 +68,7 @@ fn main() {
         Command::Export(a) => rtdiff::cli::export::run(a),
         Command::Report(a) => rtdiff::cli::report::run(a),
         Command::Compare(a) => rtdiff::cli::compare::run(a),
+        Command::CheckImage(a) => rtdiff::cli::check_image::run(a),
     };
     if let Err(e) = result {
         eprintln!("rtdiff: error: {e}");

@@ -229,9 +229,9 @@ fn the_program_path_judges_a_tracer_it_cannot_link() {
             Some("T") => assert!(out.starts_with("FAIL") && out.contains("distance"), "{out}"),
             _ => assert!(out.contains("primitive") && out.contains("no-such-primitive"), "{out}"),
         }
-        if flag.is_some() {
+        if let Some(f) = flag {
             // The disputes are a ray file `trace` reads back.
-            let disputes = d.join(format!("hits_{}.disputes.csv", flag.unwrap()));
+            let disputes = d.join(format!("hits_{f}.disputes.csv"));
             let back = rtdiff::rays::file::read_rays(&disputes).unwrap();
             assert!(!back.is_empty());
             let text = std::fs::read_to_string(&disputes).unwrap();

@@ -59,19 +59,20 @@ def row(mesh, tracer, report):
             by[k] = by.get(k, 0) + n
     crossing = sum(r["rays"] for r in rows if r["set"] in ("edges", "vertices"))
     leaks = sum(r["leaks"] for r in rows if r["set"] in ("edges", "vertices"))
+    ref_leaks = sum(s["reference_leaks"] for s in sets.values() if s["set"] in ("edges", "vertices"))
     spawned = sum(s["spawned_rays"] for s in sets.values())
     selfh = sum(r["false_self_hits"] for r in rows)
     per_m = lambda n, d: f"{n * 1e6 / d:.0f}" if d else "-"
     wrong_text = f"{wrong}" + (f" ({', '.join(f'{k} {n}' for k, n in sorted(by.items()))})" if by else "")
     return (f"| {mesh} | {tracer} | {rays} | {agree} | {exact} / {within} | {wrong_text} | "
-            f"{per_m(leaks, crossing)} | {per_m(selfh, spawned)} |")
+            f"{per_m(leaks, crossing)} ({per_m(ref_leaks, crossing)}) | {per_m(selfh, spawned)} |")
 
 
 def main():
     which = sys.argv[1] if len(sys.argv) > 1 else "dragons"
     count = sys.argv[sys.argv.index("--count") + 1] if "--count" in sys.argv else "10000"
     py = os.environ.get("RTDIFF_PROGRAM_PYTHON", str(ROOT / ".venv/bin/python"))
-    print("| mesh | tracer | rays | agree | differ: exact / within bound | wrong (by class) | leaks per M (edges, vertices) | false self-hits per M spawned |")
+    print("| mesh | tracer | rays | agree | differ: exact / within bound | wrong (by class) | leaks per M edge/vertex rays (reference's) | false self-hits per M spawned |")
     print("|---|---|---:|---:|---:|---|---:|---:|")
     for m in meshes(which):
         name = m.relative_to(ROOT / "assets")

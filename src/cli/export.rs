@@ -1,4 +1,4 @@
-//! `rtdiff export SCENE --to mitsuba -o DIR`: write a scene for another renderer.
+//! `rtdiff export SCENE --to mitsuba|obj -o DIR`: write a scene for another renderer.
 
 use std::path::PathBuf;
 
@@ -11,6 +11,8 @@ use crate::shading::ShadingModelKind;
 pub enum ExportTarget {
     /// Mitsuba 3 (scene.xml + PLY meshes + EXR textures + rtdiff.json for the Whitted plugin).
     Mitsuba,
+    /// Wavefront OBJ + MTL for any renderer (face i is rtdiff's primitive i), camera and lights in scene.json.
+    Obj,
 }
 
 /// Arguments of `rtdiff export`.
@@ -50,6 +52,7 @@ fn parse_model(s: &str) -> std::result::Result<ShadingModelKind, String> {
 pub fn run(args: &ExportArgs) -> Result<()> {
     let ov = args.image.overrides()?;
     let report = match args.to {
+        ExportTarget::Obj => return run_obj(args, &ov),
         ExportTarget::Mitsuba => export_mitsuba_file(&args.scene, &ov, args.model, &args.output)?,
     };
     if args.json {
@@ -65,6 +68,23 @@ pub fn run(args: &ExportArgs) -> Result<()> {
     }
     if !args.quiet {
         for w in &report.warnings {
+            eprintln!("rtdiff: warning: {}: {w}", args.scene.display());
+        }
+    }
+    Ok(())
+}
+
+/// `rtdiff export --to obj`.
+fn run_obj(args: &ExportArgs, ov: &crate::scene::Overrides) -> Result<()> {
+    let scene = crate::scene::Scene::load_with(&args.scene, ov)?;
+    let r = crate::scene::export::obj::export_obj(&scene, &args.output)?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&r).unwrap_or_default());
+    } else {
+        println!("{} -> {} ({} triangles)", args.scene.display(), args.output.join("scene.obj").display(), r.triangles);
+    }
+    if !args.quiet {
+        for w in &r.warnings {
             eprintln!("rtdiff: warning: {}: {w}", args.scene.display());
         }
     }

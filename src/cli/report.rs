@@ -27,6 +27,10 @@ pub struct ReportArgs {
     /// No progress bars.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Add a tracer's build and render rows to the performance table (repeatable): plugin:PATH
+    /// (a shared library implementing include/rtdiff_tracer.h), native, brute or embree.
+    #[arg(long)]
+    pub tracer: Vec<crate::backends::TracerArg>,
 }
 
 /// Run `rtdiff report`.
@@ -39,6 +43,7 @@ pub fn run(args: &ReportArgs) -> Result<()> {
         runs: args.runs,
         size: args.size,
         quiet: args.quiet,
+        tracers: args.tracer.iter().map(|t| t.backend()).collect::<Result<_>>()?,
     };
     let g = generate(&opts)?;
     if !args.quiet {

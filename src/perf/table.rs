@@ -237,6 +237,30 @@ pub fn rows() -> Vec<RowSpec> {
         .collect()
 }
 
+/// A build row and a render row (all threads) for each of `tracers` (plugins named on the command line).
+pub fn tracer_rows(tracers: &[Backend]) -> Vec<RowSpec> {
+    let mut v = Vec::new();
+    for &backend in tracers {
+        let label = AccelConfig { backend, ..Default::default() }.label();
+        let accel = AccelSpec { backend, builder: Builder::Sah, traversal: Traversal::Fast };
+        v.push(RowSpec {
+            key: format!("build-{label}"),
+            label: format!("Time to create {label}"),
+            kind: RowKind::Build { accel },
+            unit: Unit::Ms,
+            published: None,
+        });
+        v.push(RowSpec {
+            key: format!("render-{label}"),
+            label: format!("Time to render {label} (all threads)"),
+            kind: RowKind::Render { accel, threads: None },
+            unit: Unit::Ms,
+            published: None,
+        });
+    }
+    v
+}
+
 /// Options of the performance table.
 #[derive(Clone, Debug)]
 pub struct PerfOptions {
@@ -250,13 +274,22 @@ pub struct PerfOptions {
     pub brute_max_triangles: usize,
     /// No progress bar.
     pub quiet: bool,
+    /// Tracers given on the command line (`--tracer plugin:PATH`): a build row and a render row each.
+    pub tracers: Vec<Backend>,
 }
 
 impl PerfOptions {
     /// The reports' setup: 800 x 800, 3 runs, the three scenes of `root/scenes`; brute force up to
     /// 100 triangles (the monkey's 968 took 142 s a run at 800 x 800 on 2 shared cores).
     pub fn full(root: &Path) -> Self {
-        Self { scenes: default_scenes(root), size: 800, runs: 3, brute_max_triangles: 100, quiet: false }
+        Self {
+            scenes: default_scenes(root),
+            size: 800,
+            runs: 3,
+            brute_max_triangles: 100,
+            quiet: false,
+            tracers: Vec::new(),
+        }
     }
 
     /// Small and fast (CI): 64 x 64, 3 runs, brute force up to 1,000 triangles.
@@ -338,7 +371,8 @@ pub fn run(opts: &PerfOptions) -> Result<PerfReport> {
         )));
     }
     let start = Instant::now();
-    let specs = rows();
+    let mut specs = rows();
+    specs.extend(tracer_rows(&opts.tracers));
     let bar = super::progress::bar((specs.len() * opts.scenes.len()) as u64, "report perf", opts.quiet);
     let mut columns = Vec::new();
     let mut cells: Vec<Vec<Cell>> = vec![Vec::new(); specs.len()];

@@ -96,6 +96,22 @@ impl PluginTracer {
     pub fn plugin(&self) -> &'static Plugin {
         self.plugin
     }
+
+    /// `rays` in the ABI's layout, converted once (for a timing loop that should time the
+    /// plugin's queries, not the conversion: [`PluginTracer::intersect_c`]).
+    pub fn c_rays(rays: &[Ray]) -> Vec<RtdiffRay> {
+        rays.iter().map(to_c).collect()
+    }
+
+    /// `rtdiff_tracer_intersect_n` on rays already in the ABI's layout, hits as the plugin writes them.
+    ///
+    /// # Panics
+    /// When `rays` and `hits` differ in length.
+    pub fn intersect_c(&self, rays: &[RtdiffRay], hits: &mut [RtdiffHit]) {
+        assert_eq!(rays.len(), hits.len(), "intersect_c: one hit per ray");
+        // SAFETY: a live scene; both buffers hold `rays.len()` items.
+        unsafe { (self.plugin.fns.intersect_n)(self.scene, rays.as_ptr(), hits.as_mut_ptr(), rays.len()) };
+    }
 }
 
 impl Tracer for PluginTracer {

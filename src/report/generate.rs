@@ -44,6 +44,8 @@ pub struct ReportOptions {
     pub size: Option<u32>,
     /// No progress bars.
     pub quiet: bool,
+    /// Tracers added to the performance table (`--tracer plugin:PATH`).
+    pub tracers: Vec<crate::backends::Backend>,
 }
 
 /// What was written.
@@ -102,6 +104,7 @@ pub fn generate(opts: &ReportOptions) -> Result<Generated> {
         po.runs = opts.runs.unwrap_or(po.runs);
         po.size = opts.size.unwrap_or(po.size);
         po.quiet = opts.quiet;
+        po.tracers = opts.tracers.clone();
         let r = crate::perf::table::run(&po)?;
         machine = Some(super::perf::machine_table(&r.machine));
         sections.push(perf_files(&r, &mut e)?);

@@ -2,10 +2,12 @@
 //! ([`metrics`]), NVIDIA FLIP ([`flip`](mod@flip)), false-colour difference pictures
 //! ([`diff_image`]), the statistical test for noisy renders ([`stats`]) and
 //! the whole comparison of two image files ([`compare`](mod@compare)), and whether two
-//! tracers render a scene alike ([`agreement`]).
+//! tracers render a scene alike ([`agreement`]), and another renderer's images checked against
+//! `reference/` ([`check`]).
 //! Definitions and formulas: `docs/image-metrics.md`.
 
 pub mod agreement;
+pub mod check;
 pub mod compare;
 pub mod diff_image;
 pub mod flip;
