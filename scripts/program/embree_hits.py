@@ -21,20 +21,24 @@ from embreex.rtcore_scene import EmbreeScene
 def read_obj(path):
     """Vertices (float32, as written) and triangles (fans of each face, in file order)."""
     verts, tris = [], []
-    with open(path, encoding="utf-8", errors="replace") as f:
-        for line in f:
-            parts = line.split()
-            if not parts:
-                continue
-            if parts[0] == "v":
-                verts.append([float(x) for x in parts[1:4]])
-            elif parts[0] == "f":
-                idx = []
-                for tok in parts[1:]:
-                    i = int(tok.split("/")[0])
-                    idx.append(i - 1 if i > 0 else len(verts) + i)
-                for k in range(1, len(idx) - 1):
-                    tris.append([idx[0], idx[k], idx[k + 1]])
+    raw = open(path, "rb").read()
+    if raw.startswith((b"\xfe\xff", b"\xff\xfe")):
+        text = raw.decode("utf-16")
+    else:
+        text = raw.decode("utf-8", errors="replace")
+    for line in text.splitlines():
+        parts = line.split()
+        if not parts:
+            continue
+        if parts[0] == "v":
+            verts.append([float(x) for x in parts[1:4]])
+        elif parts[0] == "f":
+            idx = []
+            for tok in parts[1:]:
+                i = int(tok.split("/")[0])
+                idx.append(i - 1 if i > 0 else len(verts) + i)
+            for k in range(1, len(idx) - 1):
+                tris.append([idx[0], idx[k], idx[k + 1]])
     return np.array(verts, dtype=np.float32), np.array(tris, dtype=np.int32).reshape(-1, 3)
 
 

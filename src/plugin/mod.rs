@@ -15,7 +15,7 @@
 pub mod ffi;
 pub mod tracer;
 
-pub use tracer::{Checked, PluginTracer};
+pub use tracer::{Checked, PluginBuffers, PluginTracer};
 
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;

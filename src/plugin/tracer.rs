@@ -41,6 +41,35 @@ fn from_c(h: &RtdiffHit) -> Option<Hit> {
     (h.prim != INVALID_ID).then_some(Hit { t: h.t, prim: h.prim, u: h.u, v: h.v })
 }
 
+/// rtdiff's primitives in the ABI's buffers: three vertices of its own per triangle
+/// (`vertices`, `indices` = 0, 1, 2, ...), spheres as centre and radius.
+pub struct PluginBuffers {
+    vertices: Vec<f32>,
+    indices: Vec<u32>,
+    sphere_data: Vec<f32>,
+    triangles: u32,
+    spheres: u32,
+}
+
+impl PluginBuffers {
+    /// The buffers of `prims`; an error when they exceed the ABI's 32-bit counts.
+    pub fn new(prims: &Primitives) -> Result<Self> {
+        let (nt, ns) = (prims.triangles.len(), prims.spheres.len());
+        if 3 * nt as u64 > u32::MAX as u64 || (nt + ns) as u64 >= u32::MAX as u64 {
+            return Err(Error::Invalid(format!(
+                "too many primitives for the plugin ABI ({nt} triangles, {ns} spheres)"
+            )));
+        }
+        Ok(Self {
+            vertices: prims.triangles.iter().flat_map(|t| t.v).flat_map(|v| v.to_array()).collect(),
+            indices: (0..3 * nt as u32).collect(),
+            sphere_data: prims.spheres.iter().flat_map(|s| [s.center.x, s.center.y, s.center.z, s.radius]).collect(),
+            triangles: nt as u32,
+            spheres: ns as u32,
+        })
+    }
+}
+
 /// A miss, for the plugin to overwrite.
 const MISS: RtdiffHit = RtdiffHit { t: f32::INFINITY, prim: INVALID_ID, u: 0.0, v: 0.0 };
 
@@ -49,35 +78,31 @@ impl PluginTracer {
     /// without `RTDIFF_FEATURE_SPHERES`, too many primitives for the ABI's
     /// 32-bit counts, and the plugin's own refusal (its message).
     pub fn new(id: PluginId, prims: &Primitives) -> Result<Self> {
+        Self::from_buffers(id, &PluginBuffers::new(prims)?)
+    }
+
+    /// Build the plugin's scene from buffers made beforehand ([`PluginBuffers::new`]): the
+    /// plugin's build alone, for a timing loop.
+    pub fn from_buffers(id: PluginId, b: &PluginBuffers) -> Result<Self> {
         let plugin = id.plugin();
-        let nt = prims.triangles.len();
-        let ns = prims.spheres.len();
-        if ns > 0 && !plugin.spheres() {
+        if b.spheres > 0 && !plugin.spheres() {
             return Err(Error::Invalid(format!(
-                "{} traces triangles only (no RTDIFF_FEATURE_SPHERES), and this scene has {ns} spheres",
-                plugin.label()
+                "{} traces triangles only (no RTDIFF_FEATURE_SPHERES), and this scene has {} spheres",
+                plugin.label(),
+                b.spheres
             )));
         }
-        if 3 * nt as u64 > u32::MAX as u64 || (nt + ns) as u64 >= u32::MAX as u64 {
-            return Err(Error::Invalid(format!(
-                "too many primitives for the plugin ABI ({nt} triangles, {ns} spheres)"
-            )));
-        }
-        let vertices: Vec<f32> = prims.triangles.iter().flat_map(|t| t.v).flat_map(|v| v.to_array()).collect();
-        let indices: Vec<u32> = (0..3 * nt as u32).collect();
-        let spheres: Vec<f32> =
-            prims.spheres.iter().flat_map(|s| [s.center.x, s.center.y, s.center.z, s.radius]).collect();
         let mut error = vec![0u8; 1024];
         // SAFETY: the buffers hold the counts given and live through the call;
         // `error` has `error.len()` writable bytes.
         let scene = unsafe {
             (plugin.fns.scene_new)(
-                vertices.as_ptr(),
-                3 * nt as u32,
-                indices.as_ptr(),
-                nt as u32,
-                if ns > 0 { spheres.as_ptr() } else { std::ptr::null() },
-                ns as u32,
+                b.vertices.as_ptr(),
+                3 * b.triangles,
+                b.indices.as_ptr(),
+                b.triangles,
+                if b.spheres > 0 { b.sphere_data.as_ptr() } else { std::ptr::null() },
+                b.spheres,
                 error.as_mut_ptr().cast(),
                 error.len(),
             )

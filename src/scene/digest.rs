@@ -28,8 +28,13 @@ pub fn traced_sha256(scene: &Scene) -> String {
     let v3 = |h: &mut Sha256, v: Vec3| f32s(h, &v.to_array());
     let v2 = |h: &mut Sha256, v: Vec2| f32s(h, &v.to_array());
 
-    u32s(&mut h, &[scene.prims.triangles.len() as u32, scene.prims.spheres.len() as u32]);
-    for (t, sh) in scene.prims.triangles.iter().zip(&scene.triangle_shading) {
+    // Zero-area triangles keep their place among the primitives (ids are file positions) but
+    // render nothing: they are left out, so the digest is that of what can be seen (and equals
+    // the digest of the same scene loaded with them dropped, as before issue 48).
+    let seen =
+        || scene.prims.triangles.iter().zip(&scene.triangle_shading).filter(|(t, _)| !crate::mesh::zero_area(t.v));
+    u32s(&mut h, &[seen().count() as u32, scene.prims.spheres.len() as u32]);
+    for (t, sh) in seen() {
         t.v.iter().for_each(|&p| v3(&mut h, p));
         sh.normals.iter().for_each(|&n| v3(&mut h, n));
         sh.uvs.iter().for_each(|&uv| v2(&mut h, uv));
@@ -96,6 +101,18 @@ mod tests {
         v.x = f32::from_bits(v.x.to_bits() + 1);
         s.prims = std::sync::Arc::new(prims);
         assert_ne!(traced_sha256(&s), before);
+    }
+
+    #[test]
+    fn a_zero_area_triangle_leaves_the_digest_alone() {
+        let mut s = scene("cornell_box.json");
+        let before = traced_sha256(&s);
+        let mut prims = (*s.prims).clone();
+        let p = prims.triangles[3].v[0];
+        prims.triangles.insert(5, crate::geometry::Triangle { v: [p, p, prims.triangles[3].v[1]] });
+        s.triangle_shading.insert(5, s.triangle_shading[3]);
+        s.prims = std::sync::Arc::new(prims);
+        assert_eq!(traced_sha256(&s), before);
     }
 
     #[test]

@@ -135,10 +135,13 @@ pub fn judge(
         if arbiter {
             let a = arbitrate(&set, ours, theirs, &arb, &TruthCache::default(), usize::MAX);
             for rp in &a.replays {
-                let verdict = match rp.native {
-                    ArbiterVerdict::Wrong => "wrong",
-                    ArbiterVerdict::WithinBound => "within the bound",
-                    ArbiterVerdict::Exact => "exact",
+                let leak =
+                    super::classify::is_leak(&set.rays[rp.index], set.tags[rp.index], &hits[rp.index], &set.prims);
+                let verdict = match (leak, rp.native) {
+                    (true, _) => "a leak through a shared edge or vertex; the arbiter judges one ray at a time",
+                    (false, ArbiterVerdict::Wrong) => "wrong",
+                    (false, ArbiterVerdict::WithinBound) => "within the bound",
+                    (false, ArbiterVerdict::Exact) => "exact",
                 };
                 disputes.push(Dispute {
                     set: name.clone(),

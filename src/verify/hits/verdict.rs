@@ -194,6 +194,11 @@ pub fn format_verdict(r: &ParityReport, reference: &str, max_replays: usize) -> 
         "{:<13} {:<28} {:>8} {:>8} {:>8} {:>8} {:>8} {:>6} {:>6}  wrong by class",
         "set", "tracer", "rays", "agree", "exact", "within", "wrong", "leaks", "self"
     );
+    let _ = writeln!(
+        o,
+        "(agree: the reference's answer; exact, within: another answer the arbiter finds exact, or within \
+         the bound; self: false self-intersections)"
+    );
     let mut quiet_sets = Vec::new();
     for s in &r.sets {
         let rows: Vec<&VariantVerdict> = v.rows.iter().filter(|x| x.set == s.set).collect();
@@ -201,8 +206,10 @@ pub fn format_verdict(r: &ParityReport, reference: &str, max_replays: usize) -> 
             quiet_sets.push(s.set.as_str());
             continue;
         }
+        // Failing tracers one row each; the passing ones that still differ from the reference
+        // (rounding: exact or within the bound) summed into one row.
         let quiet = rows.iter().filter(|x| x.all_agree()).count();
-        for x in rows.iter().filter(|x| !x.all_agree()) {
+        for x in rows.iter().filter(|x| !x.passed()) {
             let mut rest = classes(&x.wrong_by);
             if x.unjudged > 0 {
                 rest = format!("{rest}{}{} not judged", if rest.is_empty() { "" } else { "; " }, x.unjudged);
@@ -220,6 +227,27 @@ pub fn format_verdict(r: &ParityReport, reference: &str, max_replays: usize) -> 
                 x.leaks,
                 x.false_self_hits,
                 rest
+            );
+        }
+        let pass: Vec<&&VariantVerdict> = rows.iter().filter(|x| x.passed() && !x.all_agree()).collect();
+        if !pass.is_empty() {
+            let sum = |f: &dyn Fn(&VariantVerdict) -> u64| pass.iter().map(|x| f(x)).sum::<u64>();
+            let name =
+                if pass.len() == 1 { short(&pass[0].tracer, 28) } else { format!("{} tracers (pass)", pass.len()) };
+            let unjudged = sum(&|x| x.unjudged);
+            let _ = writeln!(
+                o,
+                "{:<13} {:<28} {:>8} {:>8} {:>8} {:>8} {:>8} {:>6} {:>6}  {}",
+                s.set,
+                name,
+                sum(&|x| x.rays as u64),
+                sum(&|x| x.agree),
+                sum(&|x| x.differ_exact),
+                sum(&|x| x.within_bound),
+                0,
+                0,
+                0,
+                if unjudged > 0 { format!("{unjudged} not judged") } else { String::new() }
             );
         }
         if quiet > 0 {
