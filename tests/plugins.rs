@@ -129,6 +129,12 @@ fn render_and_trace_take_a_plugin() {
     let (a, b) = (image::open(&png).unwrap().to_rgb8(), image::open(&own).unwrap().to_rgb8());
     let same = a.pixels().zip(b.pixels()).filter(|(x, y)| x == y).count();
     assert!(same >= 32 * 32 * 95 / 100, "{same} of 1024 pixels equal");
+    // A plugin's garbage never reaches the shading: an invalid hit renders as a miss, named once on stderr.
+    let garbage = format!("plugin:{}", s(&c_plugin(Some("GARBAGE"))));
+    let (code, _, err) =
+        rtdiff(&["render", s(&scene), "-o", s(&png), "--width", "16", "--height", "16", "--tracer", &garbage]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(err.matches("returned an invalid hit (uv-not-finite").count(), 1, "{err}");
     // A scene with spheres is refused by a triangles-only plugin, with its name.
     let spheres = common::root().join("scenes/spheres.json");
     let (code, _, err) =
@@ -308,6 +314,19 @@ fn primitive_ids_are_triangle_positions_in_the_file() {
     // `judge` reads the same ids back and agrees; the ray through the zero-area triangle's id is wrong.
     let (code, out, err) = rtdiff(&["judge", s(&obj), "--rays", s(&rays), "--hits", s(&hits), "--reference", "brute"]);
     assert_eq!(code, 0, "{out}{err}");
+    // In a scene, the meshes' triangles follow each other in meshes[] order, then the spheres.
+    let scene = common::write(
+        &d,
+        "s.json",
+        r#"{ "meshes": [ { "file": "m.obj" }, { "file": "m.obj" } ], "spheres": [ { "center": [0, 0, -5], "radius": 1 } ] }"#,
+    );
+    let sc = rtdiff::scene::Scene::load(&scene).unwrap();
+    assert_eq!(sc.prims.len(), 7);
+    let origins: Vec<String> = [0, 2, 3, 5, 6].iter().map(|&p| sc.primitive_origin(p)).collect();
+    assert_eq!(
+        origins,
+        ["meshes[0] triangle 0", "meshes[0] triangle 2", "meshes[1] triangle 0", "meshes[1] triangle 2", "sphere 0"]
+    );
     let wrong = common::write(&d, "w.csv", "hit,t,prim,u,v\n1,1,0,0.5,0.25\n1,1,2,0.25,0.5\n");
     let (code, out, _) = rtdiff(&["judge", s(&obj), "--rays", s(&rays), "--hits", s(&wrong), "--reference", "brute"]);
     assert_eq!(code, 2, "{out}");

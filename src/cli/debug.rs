@@ -88,8 +88,9 @@ fn print_node(scene: &Scene, n: &RayNode, indent: usize, out: &mut String) {
             let name = &scene.materials[h.material as usize].name;
             let _ = writeln!(
                 out,
-                " -> hit prim {} at t {:.6}, point {}, normal {}, uv ({:.4}, {:.4}), material '{name}', colour {}",
+                " -> hit prim {} ({}) at t {:.6}, point {}, normal {}, uv ({:.4}, {:.4}), material '{name}', colour {}",
                 h.prim,
+                scene.primitive_origin(h.prim),
                 h.t,
                 v3(h.position),
                 v3(h.normal),
@@ -115,7 +116,12 @@ fn print_node(scene: &Scene, n: &RayNode, indent: usize, out: &mut String) {
                     let _ = writeln!(out, "{pad}    shadow ray reaches the light");
                 }
                 Some((prim, t)) => {
-                    let _ = writeln!(out, "{pad}    shadow ray BLOCKED by prim {prim} at {:.4} of the way", t);
+                    let _ = writeln!(
+                        out,
+                        "{pad}    shadow ray BLOCKED by prim {prim} ({}) at {:.4} of the way",
+                        scene.primitive_origin(prim),
+                        t
+                    );
                 }
             }
         }

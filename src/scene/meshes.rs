@@ -44,6 +44,8 @@ pub(crate) struct MeshTriangles {
     pub triangles: Vec<Triangle>,
     /// Shading data, one per triangle.
     pub shading: Vec<TriangleShading>,
+    /// The primitive id of each entry's first triangle (entry `m`'s triangle `k` is `mesh_starts[m] + k`).
+    pub mesh_starts: Vec<u32>,
     /// Zero-area triangles (kept in place), summed over the entries.
     pub zero_area: usize,
     /// Problems in the mesh files that did not stop the load (each file's once).
@@ -74,6 +76,7 @@ pub(crate) fn load_meshes(
         place_mesh(&mut mesh, spec);
         validate::check_mesh_bounds(path, &format!("meshes[{mi}]"), &spec.file, &mesh.positions)?;
         let ids = entry_materials(mi, spec, &mesh, materials, path)?;
+        out.mesh_starts.push(out.triangles.len() as u32);
         push_triangles(&mesh, &ids, &mut out);
     }
     Ok(out)

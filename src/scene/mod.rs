@@ -72,6 +72,8 @@ pub struct Scene {
     pub accel: AccelConfig,
     /// Zero-area triangles among the meshes' triangles (kept in place: ids are file positions).
     pub zero_area: usize,
+    /// The primitive id of each `meshes[]` entry's first triangle ([`Scene::primitive_origin`]).
+    pub mesh_starts: Vec<u32>,
     /// Problems in the mesh files that did not stop the load (`file:line: what`).
     pub warnings: Vec<String>,
 }
@@ -140,8 +142,22 @@ impl Scene {
             params: file.params,
             accel: file.accel.resolve(&file.features),
             zero_area: meshes.zero_area,
+            mesh_starts: meshes.mesh_starts,
             warnings: meshes.warnings,
         })
+    }
+
+    /// Where primitive `prim` comes from in the scene file: `meshes[M] triangle K` (`K` the
+    /// triangle's position in that mesh's file) or `sphere J`.
+    pub fn primitive_origin(&self, prim: u32) -> String {
+        match self.prims.sphere_index(prim as usize) {
+            Some(j) => format!("sphere {j}"),
+            None => {
+                let m = self.mesh_starts.partition_point(|&s| s <= prim).saturating_sub(1);
+                let start = self.mesh_starts.get(m).copied().unwrap_or(0);
+                format!("meshes[{m}] triangle {}", prim - start)
+            }
+        }
     }
 
     /// Material index of primitive `prim`.
