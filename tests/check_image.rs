@@ -87,3 +87,29 @@ fn export_obj_keeps_primitive_ids_and_coordinates() {
     assert!(ha.lines().filter(|l| l.starts_with("1,")).count() > 300, "{ha}");
     assert_eq!(ha, hb, "the OBJ traces differently from the scene");
 }
+
+#[test]
+fn check_image_runs_welch_on_the_seeds_of_a_noisy_scene() {
+    let render = |dir: &Path, seeds: std::ops::Range<u64>, extra: &[&str]| {
+        for k in seeds {
+            let out = dir.join(format!("cube.phong.s{k}.exr"));
+            let seed = (1000 + k).to_string();
+            let base =
+                ["render", "scenes/cube.json", "--width", "128", "--height", "128", "--quiet", "--seed", &seed, "-o"];
+            let (code, _, err) = rtdiff(&[&base[..], &[s(&out)], extra].concat());
+            assert_eq!(code, 0, "{err}");
+        }
+    };
+    // 32 renders with their own seeds, as tests/mitsuba_reference.rs checks rtdiff: no pixel rejected.
+    let good = common::temp_dir("check-image-noisy");
+    render(&good, 0..32, &[]);
+    let (code, out, err) = rtdiff(&["check-image", "--image", s(&good)]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("cube.phong: 0 of") && out.contains("32 renders vs 64 reference seeds"), "{out}");
+    // Shading switched off: every pixel rejected.
+    let bad = common::temp_dir("check-image-noisy-bad");
+    render(&bad, 0..4, &["--feature", "shading=off"]);
+    let (code, out, _) = rtdiff(&["check-image", "--image", s(&bad)]);
+    assert_eq!(code, 2, "{out}");
+    assert!(out.starts_with("FAIL"), "{out}");
+}
