@@ -71,6 +71,8 @@ pub struct ParityArgs {
 
 /// Run `rtdiff parity`.
 pub fn run(args: &ParityArgs) -> Result<()> {
+    // Plugins first: a missing library or symbol is reported before the scene is loaded.
+    let backends = args.tracer.iter().map(|t| t.backend()).collect::<Result<Vec<_>>>()?;
     let (ctx, skipped) = crate::rays::load_context_counted(&args.scene)?;
     super::warnings::degenerate(&args.scene, &ctx.prims, skipped);
     let sets = match args.rays.0 {
@@ -86,8 +88,7 @@ pub fn run(args: &ParityArgs) -> Result<()> {
         max_examples: args.examples,
         arbiter: !args.no_arbiter,
         sweep_count: (args.sweep_count > 0).then_some(args.sweep_count),
-        variants: if !args.tracer.is_empty() {
-            let backends = args.tracer.iter().map(|t| t.backend()).collect::<Result<Vec<_>>>()?;
+        variants: if !backends.is_empty() {
             backends.into_iter().map(|backend| crate::backends::AccelConfig { backend, ..Default::default() }).collect()
         } else if args.default_only {
             vec![crate::backends::AccelConfig::default()]

@@ -31,13 +31,13 @@ pub struct TraceArgs {
 
 /// Run `rtdiff trace`.
 pub fn run(args: &TraceArgs) -> Result<()> {
+    let backend = args.tracer.backend()?;
     let (ctx, skipped) = if args.normalize {
         crate::rays::load_context_counted(&args.scene)?
     } else {
         crate::rays::load_context_file_coordinates(&args.scene)?
     };
     super::warnings::degenerate(&args.scene, &ctx.prims, skipped);
-    let backend = args.tracer.backend()?;
     let rays = read_rays(&args.rays)?;
     let hits = trace_rays(ctx.prims, &AccelConfig { backend, ..Default::default() }, &rays)?;
     write_hits(&args.out, &hits)?;
