@@ -22,6 +22,7 @@ pub mod light;
 pub mod limits;
 pub mod material;
 pub mod mesh;
+pub mod output;
 pub mod perf;
 pub mod pipeline;
 pub mod post;

@@ -208,7 +208,7 @@ fn race(args: &BenchArgs, rounds: usize) -> Result<()> {
     if let Some(path) = &args.json {
         let run = RaceRun { meshes: &meshes, renders: &renders, threads: &args.threads, rounds };
         let text = serde_json::to_string_pretty(&run).map_err(|e| Error::Invalid(e.to_string()))?;
-        std::fs::write(path, text).map_err(|e| Error::file(path, format!("cannot write: {e}")))?;
+        crate::output::write(path, text)?;
     }
     Ok(())
 }
