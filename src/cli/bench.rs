@@ -16,7 +16,7 @@ use crate::perf::render_race::{RenderRaceOptions, SceneRace};
 /// Arguments of `rtdiff bench`.
 #[derive(clap::Args, Debug)]
 pub struct BenchArgs {
-    /// Scene files, or OBJ meshes (normalised to the unit sphere); default
+    /// Scene files, or meshes (.obj, .ply, .gltf, .glb, .stl; normalised to the unit sphere); default
     /// assets/dragon_87k.obj and assets/dragon_full.obj when present.
     pub scenes: Vec<PathBuf>,
     /// Timed runs per measurement (the median is reported; 1 to 10000).

@@ -11,7 +11,7 @@ use crate::rays::file::{read_rays, write_hits};
 /// Arguments of `rtdiff trace`.
 #[derive(clap::Args, Debug)]
 pub struct TraceArgs {
-    /// Scene: a scene .json file, or a mesh: .obj, .ply, optionally .gz (normalised to the unit sphere, like `rtdiff parity`).
+    /// Scene: a scene .json file, or a mesh: .obj, .ply, .gltf, .glb, .stl, optionally .gz (normalised to the unit sphere, like `rtdiff parity`).
     pub scene: PathBuf,
     /// Rays, CSV: ox,oy,oz,dx,dy,dz,tnear,tfar.
     #[arg(long)]
