@@ -9,6 +9,7 @@ pub mod accel;
 pub mod backends;
 pub mod bvh;
 pub mod camera;
+pub mod campaign;
 pub mod cli;
 pub mod debug;
 pub mod embree;

@@ -34,6 +34,8 @@ enum Command {
     Report(rtdiff::cli::report::ReportArgs),
     /// Compare two images (EXR or PNG): MAE, RMSE, relMSE, PSNR, max error, pixels over thresholds, FLIP.
     Compare(rtdiff::cli::compare::CompareArgs),
+    /// Run a campaign (meshes x ray sets x tracers) or one shard of it, resumably; merge shard folders.
+    Campaign(rtdiff::cli::campaign::CampaignArgs),
 }
 
 fn main() {
@@ -58,6 +60,7 @@ fn main() {
         Command::Export(a) => rtdiff::cli::export::run(a),
         Command::Report(a) => rtdiff::cli::report::run(a),
         Command::Compare(a) => rtdiff::cli::compare::run(a),
+        Command::Campaign(a) => rtdiff::cli::campaign::run(a),
     };
     if let Err(e) = result {
         eprintln!("rtdiff: error: {e}");

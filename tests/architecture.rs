@@ -43,7 +43,7 @@ const PIPELINE: &[&str] = &[
 const FOUNDATION: &[&str] = &["error", "limits", "features", "rng", "sampler", "mesh", "output", "backends"];
 
 /// The differential harness and the tools beside the pipeline: they read from it, never the reverse.
-const BESIDE: &[&str] = &["rays", "verify", "perf", "report", "cli", "fuzz", "debug"];
+const BESIDE: &[&str] = &["rays", "verify", "perf", "report", "cli", "fuzz", "debug", "campaign"];
 
 /// The tracer backends and their factory, which `accel/` must not import.
 const BACKENDS: &[&str] = &["bvh", "embree", "backends"];

@@ -85,6 +85,13 @@ fn no_subcommand_panics_on_a_closed_stdout() {
             .args(["render", scene, "-o", png_s, "--width", "16", "--height", "16", "--quiet"]),
     );
     let rays = common::write(&d, "rays.csv", "0,0,-5,0,0,1,0,100\n");
+    let meshes = common::root().join("scenes/meshes");
+    let plan = common::write(
+        &d,
+        "plan.toml",
+        &format!("meshes = [{:?}]\nreports = [\"parity\"]\n", meshes.display().to_string()),
+    );
+    let plan = plan.to_str().unwrap();
     let hits = d.join("hits.csv");
     let cases: Vec<Vec<&str>> = vec![
         vec!["render", scene, "-o", png_s, "--width", "16", "--height", "16"],
@@ -94,6 +101,7 @@ fn no_subcommand_panics_on_a_closed_stdout() {
         vec!["parity", scene, "--count", "100", "--default-only", "--reference", "brute", "--json"],
         vec!["debug", scene, "--pixel", "8", "8", "--json"],
         vec!["report", "--help"],
+        vec!["campaign", plan, "--list"],
     ];
     for args in cases {
         // Both outputs closed: what a command prints to stderr (a summary, a
