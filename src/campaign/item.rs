@@ -123,6 +123,10 @@ pub struct ItemResult {
     pub error: Option<String>,
     /// Wall-clock seconds of the item (a timing).
     pub seconds: f64,
+    /// CPU seconds of the process over the item, every thread counted (a timing: what the item
+    /// costs in core-seconds, whatever else the machine runs).
+    #[serde(default)]
+    pub cpu_seconds: f64,
 }
 
 impl ItemResult {
@@ -130,6 +134,7 @@ impl ItemResult {
     pub fn without_timings(&self) -> Self {
         let mut r = self.clone();
         r.seconds = 0.0;
+        r.cpu_seconds = 0.0;
         if let Some(s) = &mut r.speed {
             for row in &mut s.rows {
                 row.build_ms = 0.0;
@@ -171,7 +176,9 @@ pub fn run(plan: &Plan, item: &Item) -> ItemResult {
         speed: None,
         error: None,
         seconds: 0.0,
+        cpu_seconds: 0.0,
     };
+    let cpu_start = crate::perf::clock::process_cpu_seconds();
     let body = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| -> crate::Result<()> {
         let (ctx, skipped) = match crate::rays::load_context_counted(&path) {
             Ok(c) => c,
@@ -206,6 +213,7 @@ pub fn run(plan: &Plan, item: &Item) -> ItemResult {
         }
     }
     result.seconds = start.elapsed().as_secs_f64();
+    result.cpu_seconds = crate::perf::clock::process_cpu_seconds() - cpu_start;
     result
 }
 

@@ -25,8 +25,11 @@ pub struct PlanFile {
     pub version: u32,
     /// A name for the reports.
     pub name: String,
+    /// The folder inputs are found from and named relative to, itself relative to the plan's
+    /// folder (default: the plan's folder).
+    pub root: String,
     /// Mesh files, folders (searched recursively for every mesh format rtdiff reads) and
-    /// globs (`assets/**/*.stl`), relative to the plan's folder.
+    /// globs (`assets/**/*.stl`), relative to `root`.
     pub meshes: Vec<String>,
     /// Globs of paths to leave out (matched against the paths as listed, relative to the plan).
     pub exclude: Vec<String>,
@@ -75,6 +78,7 @@ impl Default for PlanFile {
         Self {
             version: PLAN_VERSION,
             name: String::new(),
+            root: ".".into(),
             meshes: Vec::new(),
             exclude: Vec::new(),
             scenes: Vec::new(),
@@ -141,7 +145,7 @@ pub struct Item {
 pub struct Plan {
     /// The plan file's path.
     pub path: PathBuf,
-    /// The folder inputs are relative to.
+    /// The folder inputs are relative to (the plan's folder joined with its `root`).
     pub dir: PathBuf,
     /// The settings (defaults filled in).
     pub file: PlanFile,
@@ -231,6 +235,10 @@ pub fn load(path: &Path) -> Result<Plan> {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
     };
+    let dir = if file.root == "." { dir } else { dir.join(&file.root) };
+    if !dir.is_dir() {
+        return Err(Error::file(path, format!("root '{}' ({}): no such folder", file.root, dir.display())));
+    }
     resolve(path, &dir, file)
 }
 
@@ -463,7 +471,32 @@ pub fn triangle_estimate(path: &Path) -> u64 {
         }
         return total.max(1);
     }
+    if gz == 1
+        && let Some(n) = header_count(path, &base)
+    {
+        return n.max(1);
+    }
     (size(path) * gz / per_triangle(&base)).max(1)
+}
+
+/// The triangle count a binary STL's header or a PLY's `element face` line states (the first
+/// 64 KiB of the file are read); `None` for other files.
+fn header_count(path: &Path, base: &str) -> Option<u64> {
+    use std::io::Read;
+    let mut head = Vec::new();
+    std::fs::File::open(path).ok()?.take(64 << 10).read_to_end(&mut head).ok()?;
+    if base.ends_with(".stl") {
+        let size = std::fs::metadata(path).ok()?.len();
+        let n = u64::from(u32::from_le_bytes(head.get(80..84)?.try_into().ok()?));
+        // Binary when the size matches the count; ASCII facets take about 250 bytes each.
+        return Some(if 84 + 50 * n == size { n } else { size / 250 });
+    }
+    if base.ends_with(".ply") {
+        let text = String::from_utf8_lossy(&head);
+        let line = text.lines().take_while(|l| !l.starts_with("end_header")).find(|l| l.starts_with("element face"))?;
+        return line.split_whitespace().nth(2)?.parse().ok();
+    }
+    None
 }
 
 #[cfg(test)]

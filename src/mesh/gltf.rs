@@ -42,6 +42,7 @@ pub(crate) fn load(path: &Path, bytes: &[u8], content: Content) -> Result<Mesh> 
         let head = String::from_utf8_lossy(&bytes[..bytes.len().min(4)]).escape_debug().to_string();
         return Err(Error::file(path, format!("invalid GLB container, byte 0: it begins with '{head}', not 'glTF'")));
     }
+    check_version(path, bytes)?;
     let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| parse_error(path, bytes, e))?;
     validate(path, &gltf.document)?;
     let dir = path.parent().unwrap_or(Path::new("."));
@@ -500,6 +501,24 @@ fn buffer_error(path: &Path, doc: &gltf::Document, e: gltf::Error) -> Error {
             let n = doc.buffers().count();
             Error::file(path, format!("cannot read the {n} buffers: {other}"))
         }
+    }
+}
+
+/// glTF 1.0 files (a GLB of version 1, or `asset.version` "1.x") are named as such: their
+/// layout differs from 2.0's, and the parser's complaint would not say so.
+fn check_version(path: &Path, bytes: &[u8]) -> Result<()> {
+    let version = if bytes.starts_with(b"glTF") {
+        let v = bytes.get(4..8).map_or(0, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+        (v != 2).then(|| format!("GLB version {v} (byte 4)"))
+    } else {
+        serde_json::from_slice::<serde_json::Value>(bytes).ok().and_then(|j| {
+            let v = j.get("asset")?.get("version")?.as_str()?.to_string();
+            (!v.starts_with("2.")).then(|| format!("asset.version \"{v}\""))
+        })
+    };
+    match version {
+        Some(v) => Err(Error::file(path, format!("{v}: rtdiff reads glTF 2.0 only"))),
+        None => Ok(()),
     }
 }
 

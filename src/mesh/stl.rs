@@ -33,12 +33,15 @@ pub(crate) fn load(path: &Path, bytes: &[u8]) -> Result<Mesh> {
         n.checked_mul(BINARY_TRIANGLE).and_then(|b| b.checked_add(BINARY_HEADER)) == Some(bytes.len())
     });
     let text_start = bytes.iter().position(|b| !b.is_ascii_whitespace()).unwrap_or(0);
+    let mut warnings = Vec::new();
     let triangles = if !exact_binary && bytes[text_start..].starts_with(b"solid") {
         read_ascii(path, bytes)?
     } else {
-        read_binary(path, bytes, count)?
+        read_binary(path, bytes, count, &mut warnings)?
     };
-    build(path, &triangles)
+    let mut mesh = build(path, &triangles)?;
+    mesh.warnings = warnings;
+    Ok(mesh)
 }
 
 /// One facet: its three corners, and where it is in the file (a line, or a byte offset).
@@ -53,7 +56,7 @@ enum Place {
     Byte(usize),
 }
 
-fn read_binary(path: &Path, bytes: &[u8], count: Option<usize>) -> Result<Vec<Facet>> {
+fn read_binary(path: &Path, bytes: &[u8], count: Option<usize>, warnings: &mut Vec<String>) -> Result<Vec<Facet>> {
     let Some(n) = count else {
         return Err(Error::file(
             path,
@@ -78,6 +81,13 @@ fn read_binary(path: &Path, bytes: &[u8], count: Option<usize>) -> Result<Vec<Fa
     }
     if n == 0 {
         return Err(Error::file(path, "binary STL: byte 80: the header counts 0 triangles"));
+    }
+    if bytes.len() > need {
+        warnings.push(format!(
+            "{}: binary STL: {} bytes after the {n} triangles its header counts are ignored",
+            path.display(),
+            bytes.len() - need
+        ));
     }
     // Each record: the normal (ignored), three corners, two attribute bytes. Trailing bytes
     // after the counted triangles are ignored, as other readers do. (stl_io would read a
