@@ -70,8 +70,9 @@ fn a_render_killed_while_writing_its_image_leaves_the_old_one_readable() {
     assert_eq!(names, ["out.exr"], "after removing {removed} stale temporary files");
 }
 
-/// Every subcommand with its standard output gone before it prints: no panic;
-/// the process ends quietly (SIGPIPE, as any Unix filter) or exits 0.
+/// `rtdiff SUBCOMMAND ... | head`: every subcommand with its standard output gone before
+/// it prints (it used to panic: `failed printing to stdout: Broken pipe`): no panic; the
+/// process ends quietly (SIGPIPE, as any Unix filter) or exits 0.
 #[test]
 fn no_subcommand_panics_on_a_closed_stdout() {
     use std::os::unix::process::ExitStatusExt;
@@ -93,13 +94,22 @@ fn no_subcommand_panics_on_a_closed_stdout() {
     );
     let plan = plan.to_str().unwrap();
     let hits = d.join("hits.csv");
+    let export = d.join("export");
     let cases: Vec<Vec<&str>> = vec![
         vec!["render", scene, "-o", png_s, "--width", "16", "--height", "16"],
         vec!["trace", scene, "--rays", rays.to_str().unwrap(), "--out", hits.to_str().unwrap()],
         vec!["compare", png_s, png_s],
+        vec!["compare", png_s, png_s, "--json"],
+        vec!["bvh-stats", scene],
         vec!["bvh-stats", scene, "--json"],
+        vec!["parity", scene, "--count", "100", "--default-only", "--reference", "brute"],
         vec!["parity", scene, "--count", "100", "--default-only", "--reference", "brute", "--json"],
+        vec!["bench", scene, "--size", "8", "--runs", "1", "--incoherent", "64"],
+        vec!["debug", scene, "--pixel", "8", "8"],
         vec!["debug", scene, "--pixel", "8", "8", "--json"],
+        vec!["export", scene, "-o", export.to_str().unwrap()],
+        vec!["render", "--help"],
+        vec!["--version"],
         vec!["report", "--help"],
         vec!["campaign", plan, "--list"],
     ];
