@@ -16,6 +16,7 @@ const PLAN: &str = r#"
 name = "kill-test"
 meshes = ["meshes"]
 tracers = ["rtdiff", "rtdiff:median/basic"]
+reference = "REFERENCE"
 reports = ["parity", "speed"]
 
 [rays]
@@ -29,6 +30,11 @@ incoherent = 512
 runs = 1
 "#;
 
+/// The plan with the reference this build has: Embree when built with it, else brute force.
+fn plan() -> String {
+    PLAN.replace("REFERENCE", if cfg!(feature = "embree") { "embree" } else { "brute" })
+}
+
 /// A folder with the plan and a copy of the authored meshes, plus one file that does not load.
 fn campaign_dir(name: &str) -> PathBuf {
     let d = common::temp_dir(name);
@@ -38,7 +44,7 @@ fn campaign_dir(name: &str) -> PathBuf {
         std::fs::copy(e.path(), meshes.join(e.file_name())).unwrap();
     }
     common::write(&meshes, "broken.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 q\nendsolid x\n");
-    common::write(&d, "plan.toml", PLAN);
+    common::write(&d, "plan.toml", &plan());
     d
 }
 
@@ -110,25 +116,34 @@ fn killed_twenty_times_and_sharded_four_ways_it_merges_like_one_uninterrupted_ru
     // Killed at random moments 20 times, then finished.
     let out = d.join("killed");
     let mut rng = rtdiff::rng::Pcg32::new(2026, 50);
-    let window = (whole_time.as_secs_f64() / 10.0).max(0.02);
+    // The start-up (plan, tracer check, every item skipped): kills land after it, within a
+    // sixth of the work, so that most stop the run midway, many after finished items.
+    let t0 = Instant::now();
+    run_ok(&d, &["campaign", "plan.toml", "-o", "whole", "--quiet"]);
+    let startup = t0.elapsed().as_secs_f64();
+    let window = ((whole_time.as_secs_f64() - startup) / 6.0).max(0.01);
     let mut interrupted = 0;
+    let mut progressed = 0;
     for _ in 0..20 {
         let before = results_in(&out);
         kill_after(
             &d,
             &["campaign", "plan.toml", "-o", "killed", "--quiet"],
             &out,
-            Duration::from_secs_f64(window * rng.next_f32() as f64),
+            Duration::from_secs_f64(startup + window * rng.next_f32() as f64),
         );
         let after = results_in(&out);
         assert!(after >= before, "a kill lost results ({before} -> {after})");
+        progressed += usize::from(after > before);
         interrupted += usize::from(after < items);
     }
     eprintln!(
-        "uninterrupted run {:.2} s; {interrupted} of 20 kills stopped the campaign before its end",
+        "uninterrupted run {:.2} s (start-up {startup:.2} s); {interrupted} of 20 kills stopped the campaign before its end, {progressed} after \
+         it had finished items",
         whole_time.as_secs_f64()
     );
     assert!(interrupted >= 10, "only {interrupted} of the 20 kills stopped the campaign before its end");
+    assert!(progressed >= 3, "only {progressed} of the 20 kills came after the run had finished items");
     run_ok(&d, &["campaign", "plan.toml", "-o", "killed", "--quiet"]);
     assert_same(&merged(&d, &["killed"], "report-killed"), &reference, "killed and resumed");
     let leftovers: Vec<String> = std::fs::read_dir(out.join("items"))
@@ -145,10 +160,13 @@ fn killed_twenty_times_and_sharded_four_ways_it_merges_like_one_uninterrupted_ru
     }
     let s2 = ["campaign", "plan.toml", "--shard", "2/4", "-o", "shard2", "--quiet"];
     for _ in 0..2 {
-        kill_after(&d, &s2, &d.join("shard2"), Duration::from_secs_f64(window * rng.next_f32() as f64));
+        // A quarter of the items: a quarter of the window.
+        let at = startup + window / 4.0 * rng.next_f32() as f64;
+        kill_after(&d, &s2, &d.join("shard2"), Duration::from_secs_f64(at));
     }
     let partial = merged_partial(&d);
-    assert!(partial.contains("Missing items"), "shard 2 unfinished: the report lists its missing items");
+    let done: usize = (1..=4).map(|k| results_in(&d.join(format!("shard{k}")))).sum();
+    assert_eq!(partial.contains("Missing items"), done < items, "the report lists missing items when there are");
     run_ok(&d, &s2);
     let sharded = merged(&d, &["shard4", "shard2", "shard1", "shard3"], "report-sharded");
     assert_same(&sharded, &reference, "four shards");
@@ -196,7 +214,7 @@ fn the_item_list_does_not_depend_on_where_the_files_are() {
 #[test]
 fn mixed_plans_and_versions_are_refused_and_bad_plans_named() {
     let d = campaign_dir("campaign-mixed");
-    let small = PLAN
+    let small = plan()
         .replace("count = 3000", "count = 50")
         .replace("reports = [\"parity\", \"speed\"]", "reports = [\"parity\"]");
     common::write(&d, "small.toml", &small);

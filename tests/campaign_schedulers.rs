@@ -16,6 +16,7 @@ const PLAN: &str = r#"
 name = "schedulers"
 meshes = ["meshes"]
 tracers = ["rtdiff"]
+reference = "REFERENCE"
 reports = ["parity"]
 
 [rays]
@@ -24,6 +25,11 @@ count = 400
 seed = 9
 "#;
 
+/// The plan with the reference this build has: Embree when built with it, else brute force.
+fn plan() -> String {
+    PLAN.replace("REFERENCE", if cfg!(feature = "embree") { "embree" } else { "brute" })
+}
+
 fn setup(name: &str) -> std::path::PathBuf {
     let d = common::temp_dir(name);
     let meshes = d.join("meshes");
@@ -31,7 +37,7 @@ fn setup(name: &str) -> std::path::PathBuf {
     for m in ["cube.obj", "cube.stl", "cube_textured.glb", "icosphere.obj", "single_triangle.obj"] {
         std::fs::copy(common::root().join("scenes/meshes").join(m), meshes.join(m)).unwrap();
     }
-    common::write(&d, "plan.toml", PLAN);
+    common::write(&d, "plan.toml", &plan());
     d
 }
 

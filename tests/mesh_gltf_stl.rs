@@ -173,6 +173,7 @@ fn malformed_gltf_and_stl_name_the_file_and_the_place() {
 }
 
 /// Every mesh file below `dir` that rtdiff reads.
+#[cfg(feature = "embree")]
 fn mesh_files(dir: &Path, out: &mut Vec<PathBuf>) {
     let mut entries: Vec<PathBuf> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).collect();
     entries.sort();
