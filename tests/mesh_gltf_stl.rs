@@ -136,6 +136,14 @@ fn malformed_gltf_and_stl_name_the_file_and_the_place() {
     let d = common::temp_dir("gltf-bad");
     let good = std::fs::read_to_string(transformed_gltf(&d)).unwrap();
     let glb = std::fs::read(authored("cube_textured.glb")).unwrap();
+    // Found by the fuzzer: what the gltf crates index without checking (they panicked).
+    let mut cube: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(authored("cube_textured.gltf")).unwrap()).unwrap();
+    cube["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = 65537.into();
+    let bad_position = cube.to_string().into_bytes();
+    cube["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = 0.into();
+    cube["images"][0] = serde_json::json!({});
+    let no_image_source = cube.to_string().into_bytes();
     let cases: Vec<(&str, Vec<u8>, &str)> = vec![
         ("syntax.gltf", good.replacen("\"scene\":0", "\"scene\":0,,", 1).into_bytes(), "syntax.gltf:1: "),
         ("index.gltf", good.replacen("\"mesh\":0", "\"mesh\":7", 1).into_bytes(), "nodes[0].mesh: Index out of bounds"),
@@ -163,6 +171,8 @@ fn malformed_gltf_and_stl_name_the_file_and_the_place() {
         ("magic.glb", [b"gltf", &glb[4..]].concat(), "invalid GLB container, byte 0"),
         ("json.glb", [&glb[..30], b"?", &glb[31..]].concat(), "GLB JSON chunk, byte 30: "),
         ("none.stl", b"solid x\nendsolid x\n".to_vec(), "none.stl:2: no facets"),
+        ("position.gltf", bad_position, "meshes[0].primitives[0].attributes.POSITION: accessor 65537 does not exist"),
+        ("image.gltf", no_image_source, "images[0]: neither a uri nor a bufferView"),
     ];
     for (name, bytes, want) in cases {
         let p = d.join(name);

@@ -535,6 +535,34 @@ fn validate(path: &Path, doc: &gltf::Document) -> Result<()> {
         return Err(Error::file(path, format!("the geometry is compressed with {ext}, which rtdiff does not read")));
     }
     let root = doc.as_json();
+    // What the crates index without checking (a panic otherwise): POSITION's accessor in their
+    // own validation, an image's source when it has neither URI nor buffer view, or a view without
+    // a MIME type.
+    for (i, m) in root.meshes.iter().enumerate() {
+        for (j, p) in m.primitives.iter().enumerate() {
+            let position = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+            if let Some(a) = p.attributes.get(&position)
+                && a.value() >= root.accessors.len()
+            {
+                return Err(Error::file(
+                    path,
+                    format!(
+                        "meshes[{i}].primitives[{j}].attributes.POSITION: accessor {} does not exist (the file has {})",
+                        a.value(),
+                        root.accessors.len()
+                    ),
+                ));
+            }
+        }
+    }
+    for (i, img) in root.images.iter().enumerate() {
+        let why = match (&img.buffer_view, &img.uri, &img.mime_type) {
+            (None, None, _) => "neither a uri nor a bufferView",
+            (Some(_), _, None) => "a bufferView but no mimeType",
+            _ => continue,
+        };
+        return Err(Error::file(path, format!("images[{i}]: {why}")));
+    }
     let mut errors = Vec::new();
     root.validate(root, gltf::json::Path::new, &mut |p, e| {
         let p = p().to_string();
