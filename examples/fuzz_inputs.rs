@@ -204,6 +204,12 @@ fn spawn_check(o: &Opts, runner: &Runner, input: &Input, outcome: &Outcome) -> R
             cmd.arg("--out").arg(dir.join("hits.csv"));
             Some("rays.csv")
         }
+        Kind::Gltf | Kind::Glb | Kind::Stl => {
+            std::fs::write(dir.join("one.csv"), rtdiff::fuzz::BASE_RAYS).map_err(|e| e.to_string())?;
+            cmd.arg("trace").arg(runner.path_of(input.kind)).args(["--rays"]).arg(dir.join("one.csv"));
+            cmd.arg("--out").arg(dir.join("hits.csv"));
+            Some(input.kind.file_name())
+        }
         Kind::Texture => return Ok(false),
         Kind::Flags => {
             if !matches!(outcome, Outcome::Refused(_)) {

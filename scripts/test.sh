@@ -46,6 +46,14 @@ if ! cmp -s scripts/program/requirements.txt .venv/.rtdiff-program-requirements 
     cp scripts/program/requirements.txt .venv/.rtdiff-program-requirements
 fi
 
+# GNU parallel for the scheduler examples' test (tests/campaign_schedulers.rs); with
+# RTDIFF_REQUIRE_PARALLEL=1 a missing parallel fails that test instead of skipping it.
+if ! command -v parallel >/dev/null 2>&1; then
+    say "GNU parallel: installing (Debian package parallel)"
+    { apt-get install -y -q parallel || { apt-get update -q && apt-get install -y -q parallel; }; } >&2
+fi
+export RTDIFF_REQUIRE_PARALLEL=1
+
 say "cargo test ${features[*]:-}"
 log="$(mktemp)"
 trap 'rm -f "$log"' EXIT

@@ -42,6 +42,8 @@ enum Command {
     CheckImage(rtdiff::cli::check_image::CheckImageArgs),
     /// Compare two images (EXR or PNG): MAE, RMSE, relMSE, PSNR, max error, pixels over thresholds, FLIP.
     Compare(rtdiff::cli::compare::CompareArgs),
+    /// Run a campaign (meshes x ray sets x tracers) or one shard of it, resumably; merge shard folders.
+    Campaign(rtdiff::cli::campaign::CampaignArgs),
 }
 
 fn main() {
@@ -69,6 +71,7 @@ fn main() {
         Command::Report(a) => rtdiff::cli::report::run(a),
         Command::Compare(a) => rtdiff::cli::compare::run(a),
         Command::CheckImage(a) => rtdiff::cli::check_image::run(a),
+        Command::Campaign(a) => rtdiff::cli::campaign::run(a),
     };
     if let Err(e) = result {
         eprintln!("rtdiff: error: {e}");

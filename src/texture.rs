@@ -46,13 +46,31 @@ impl Texture {
         if let Err(e) = std::fs::metadata(path) {
             return Err(Error::io(path, &e));
         }
-        let decode_err = |e: image::ImageError| Error::file(path, format!("cannot decode texture: {e}"));
         let reader = || -> Result<image::ImageReader<std::io::BufReader<std::fs::File>>> {
             image::ImageReader::open(path)
                 .map_err(|e| Error::io(path, &e))?
                 .with_guessed_format()
                 .map_err(|e| Error::io(path, &e))
         };
+        Self::decode_with(path, raw, reader)
+    }
+
+    /// Decode an encoded image (PNG, JPEG) held in memory, such as a texture embedded in a
+    /// glTF file; `name` names it in errors. The same limits and decoding as [`Texture::load`].
+    pub fn from_memory(bytes: &[u8], name: &Path, raw: bool) -> Result<Self> {
+        let reader = || -> Result<image::ImageReader<std::io::Cursor<&[u8]>>> {
+            image::ImageReader::new(std::io::Cursor::new(bytes)).with_guessed_format().map_err(|e| Error::io(name, &e))
+        };
+        Self::decode_with(name, raw, reader)
+    }
+
+    /// Decode what `reader` reads (called twice: the header, then the pixels).
+    fn decode_with<R: std::io::BufRead + std::io::Seek>(
+        path: &Path,
+        raw: bool,
+        reader: impl Fn() -> Result<image::ImageReader<R>>,
+    ) -> Result<Self> {
+        let decode_err = |e: image::ImageError| Error::file(path, format!("cannot decode texture: {e}"));
         let (w, h) = reader()?.into_dimensions().map_err(decode_err)?;
         let side = limits::MAX_TEXTURE_SIDE;
         if w > side || h > side || w as u64 * h as u64 > limits::MAX_TEXTURE_PIXELS {

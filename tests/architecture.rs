@@ -39,11 +39,12 @@ const PIPELINE: &[&str] = &[
     "pipeline",
 ];
 
-/// What the pipeline builds on: errors, limits, switches, random numbers, mesh files, the backend factory.
-const FOUNDATION: &[&str] = &["error", "limits", "features", "rng", "sampler", "mesh", "backends"];
+/// What the pipeline builds on: errors, limits, switches, random numbers, mesh files, atomic output
+/// files, the backend factory.
+const FOUNDATION: &[&str] = &["error", "limits", "features", "rng", "sampler", "mesh", "output", "backends"];
 
 /// The differential harness and the tools beside the pipeline: they read from it, never the reverse.
-const BESIDE: &[&str] = &["rays", "verify", "perf", "report", "cli", "fuzz", "debug"];
+const BESIDE: &[&str] = &["rays", "verify", "perf", "report", "cli", "fuzz", "debug", "campaign"];
 
 /// The tracer backends and their factory, which `accel/` must not import.
 const BACKENDS: &[&str] = &["bvh", "embree", "plugin", "backends"];

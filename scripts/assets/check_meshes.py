@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Check the authored meshes in scenes/meshes/ (or --dir DIR): counts, closedness, winding, normals,
-texture coordinates, the texture PNG and the Cornell box layout and materials.
+texture coordinates, the texture PNG and the Cornell box layout and materials; the cube's glTF, GLB and
+STL copies hold the OBJ's triangles in the OBJ's order (and the glTF ones its uvs and texture).
 
 Standard library only.  Prints one line per failed check and a closing line 'N passed, N failed';
 exits 1 if any check failed.
@@ -9,6 +10,8 @@ usage: check_meshes.py [--dir DIR] [-v]
 """
 
 import argparse
+import base64
+import json
 import math
 import os
 import struct
@@ -410,6 +413,70 @@ def check_icosphere(ck, d):
     check_common(ck, name, o)
 
 
+def stl_triangles(path):
+    """Triangles of a binary or ASCII STL as tuples of three (x, y, z)."""
+    with open(path, "rb") as f:
+        data = f.read()
+    if len(data) >= 84 and 84 + 50 * struct.unpack("<I", data[80:84])[0] == len(data):
+        n = struct.unpack("<I", data[80:84])[0]
+        return [tuple(struct.unpack("<9f", data[84 + 50 * k + 12:84 + 50 * k + 48])[3 * j:3 * j + 3]
+                      for j in range(3)) for k in range(n)]
+    verts = [tuple(float(x) for x in l.split()[1:4]) for l in data.decode("ascii").splitlines()
+             if l.split()[:1] == ["vertex"]]
+    return [tuple(verts[3 * k:3 * k + 3]) for k in range(len(verts) // 3)]
+
+
+def gltf_cube(path):
+    """(triangles, uvs per corner, image) of the one-primitive glTF or GLB the generator writes."""
+    with open(path, "rb") as f:
+        data = f.read()
+    if data[:4] == b"glTF":
+        n = struct.unpack("<I", data[12:16])[0]
+        doc = json.loads(data[20:20 + n])
+        m = struct.unpack("<I", data[20 + n:24 + n])[0]
+        buf = data[28 + n:28 + n + m]
+    else:
+        doc = json.loads(data)
+        buf = base64.b64decode(doc["buffers"][0]["uri"].split(",", 1)[1])
+
+    def read(acc, fmt, k):
+        a = doc["accessors"][acc]
+        v = doc["bufferViews"][a["bufferView"]]
+        off = v.get("byteOffset", 0)
+        return list(struct.unpack(f"<{a['count'] * k}{fmt}", buf[off:off + a["count"] * k * struct.calcsize(fmt)]))
+
+    prim = doc["meshes"][0]["primitives"][0]
+    p = read(prim["attributes"]["POSITION"], "f", 3)
+    t = read(prim["attributes"]["TEXCOORD_0"], "f", 2)
+    idx = read(prim["indices"], "H", 1)
+    tris = [tuple(tuple(p[3 * i:3 * i + 3]) for i in idx[3 * k:3 * k + 3]) for k in range(len(idx) // 3)]
+    uvs = [tuple((t[2 * i], 1 - t[2 * i + 1]) for i in idx[3 * k:3 * k + 3]) for k in range(len(idx) // 3)]
+    image = doc["images"][0]
+    if "uri" in image:
+        with open(os.path.join(os.path.dirname(path), image["uri"]), "rb") as f:
+            png = f.read()
+    else:
+        v = doc["bufferViews"][image["bufferView"]]
+        png = buf[v["byteOffset"]:v["byteOffset"] + v["byteLength"]]
+    return tris, uvs, png
+
+
+def check_cube_formats(ck, d):
+    o = Obj(os.path.join(d, "cube_textured.obj"))
+    tris = [tuple(o.v[i] for i in t["v"]) for t in o.tris]
+    uvs = [tuple(o.vt[i] for i in t["vt"]) for t in o.tris]
+    for name in ("cube.stl", "cube_ascii.stl"):
+        got = stl_triangles(os.path.join(d, name))
+        ck.check(got == tris, f"{name}: the OBJ cube's 12 triangles in its order ({len(got)} triangles)")
+    with open(os.path.join(d, "cube_texture.png"), "rb") as f:
+        png = f.read()
+    for name in ("cube_textured.gltf", "cube_textured.glb"):
+        got, got_uvs, got_png = gltf_cube(os.path.join(d, name))
+        ck.check(got == tris, f"{name}: the OBJ cube's 12 triangles in its order ({len(got)} triangles)")
+        ck.check(got_uvs == uvs, f"{name}: the OBJ cube's texture coordinates (v flipped as glTF's)")
+        ck.check(got_png == png, f"{name}: the texture is cube_texture.png")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--dir", default=DEFAULT_DIR)
@@ -420,7 +487,8 @@ def main():
                lambda: check_cube(ck, a.dir, "cube.obj", False),
                lambda: check_cube(ck, a.dir, "cube_textured.obj", True),
                lambda: check_cornell(ck, a.dir),
-               lambda: check_icosphere(ck, a.dir)):
+               lambda: check_icosphere(ck, a.dir),
+               lambda: check_cube_formats(ck, a.dir)):
         try:
             fn()
         except (OSError, ValueError, KeyError, IndexError, TypeError, ZeroDivisionError) as e:

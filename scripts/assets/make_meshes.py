@@ -6,6 +6,9 @@
     cube_textured.obj/.mtl, cube_texture.png   the same cube with per-face uvs and an 8x8 PNG texture
     cornell_box.obj/.mtl                   Cornell box, 16 quads = 32 triangles, open side facing -z
     icosphere.obj                          unit icosphere, subdivision level 3 (1280 triangles, closed)
+    cube_textured.gltf, cube_textured.glb  the textured cube as glTF 2.0 (data-URI buffer + the PNG by name;
+                                           binary with the PNG inside), same triangles in the same order
+    cube.stl, cube_ascii.stl               the cube as binary and ASCII STL, same triangles in the same order
 
 Standard library only; the output is deterministic (same bytes every run).  See scenes/meshes/README.md.
 
@@ -13,6 +16,8 @@ usage: make_meshes.py [--out DIR]
 """
 
 import argparse
+import base64
+import json
 import math
 import os
 import struct
@@ -224,6 +229,91 @@ def cube_textured_mtl():
             "map_Kd cube_texture.png\n")
 
 
+# ------------------------------------------------------------------ the cube as glTF 2.0 and STL
+def cube_triangles():
+    """The OBJ cube's 12 triangles in its face order: ((p0, p1, p2), (uv0, uv1, uv2), face normal)."""
+    uv = [(0, 0), (1, 0), (1, 1), (0, 1)]
+    out = []
+    for _, q in cube_quads():
+        for tri in ((0, 1, 2), (0, 2, 3)):
+            out.append((tuple(q[j] for j in tri), tuple(uv[j] for j in tri), quad_normal(q)))
+    return out
+
+
+def pad4(b, fill=b"\x00"):
+    return b + fill * (-len(b) % 4)
+
+
+def cube_gltf(binary, png):
+    """glTF 2.0 of the textured cube: 4 vertices per face (positions, normals, uvs with glTF's v down),
+    u16 indices (0,1,2), (0,2,3) per face in the OBJ's face order, one node with no transform, a
+    material whose base colour texture is the cube's PNG (clamped, as rtdiff samples textures). The .gltf
+    holds its buffer as a data URI and names the PNG; the .glb holds both in its binary chunk."""
+    pos, nrm, uvs, idx = b"", b"", b"", []
+    for f, (_, q) in enumerate(cube_quads()):
+        n = quad_normal(q)
+        for j, (u, v) in enumerate([(0, 0), (1, 0), (1, 1), (0, 1)]):
+            pos += struct.pack("<3f", *q[j])
+            nrm += struct.pack("<3f", *n)
+            uvs += struct.pack("<2f", u, 1 - v)
+        idx += [4 * f + k for k in (0, 1, 2, 0, 2, 3)]
+    ind = pad4(struct.pack(f"<{len(idx)}H", *idx))
+    views = [(pos, 34962), (nrm, 34962), (uvs, 34962), (ind, 34963)]
+    data, buffer_views = b"", []
+    for blob, target in views:
+        buffer_views.append({"buffer": 0, "byteOffset": len(data), "byteLength": len(blob), "target": target})
+        data += blob
+    buffer_views[3]["byteLength"] = 2 * len(idx)
+    doc = {
+        "asset": {"version": "2.0", "generator": GENERATED},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0, "name": "cube"}],
+        "meshes": [{"name": "cube", "primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2},
+                                                    "indices": 3, "material": 0}]}],
+        "materials": [{"name": "cube_textured", "pbrMetallicRoughness": {
+            "baseColorFactor": [1, 1, 1, 1], "baseColorTexture": {"index": 0}, "metallicFactor": 0}}],
+        "textures": [{"source": 0, "sampler": 0}],
+        "samplers": [{"magFilter": 9728, "minFilter": 9728, "wrapS": 33071, "wrapT": 33071}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 24, "type": "VEC3",
+             "min": [-0.5, -0.5, -0.5], "max": [0.5, 0.5, 0.5]},
+            {"bufferView": 1, "componentType": 5126, "count": 24, "type": "VEC3"},
+            {"bufferView": 2, "componentType": 5126, "count": 24, "type": "VEC2"},
+            {"bufferView": 3, "componentType": 5123, "count": len(idx), "type": "SCALAR"},
+        ],
+        "bufferViews": buffer_views,
+    }
+    if not binary:
+        doc["buffers"] = [{"byteLength": len(data),
+                           "uri": "data:application/octet-stream;base64," + base64.b64encode(data).decode()}]
+        doc["images"] = [{"uri": "cube_texture.png"}]
+        return (json.dumps(doc, indent=1) + "\n").encode()
+    doc["bufferViews"].append({"buffer": 0, "byteOffset": len(data), "byteLength": len(png)})
+    doc["images"] = [{"bufferView": 4, "mimeType": "image/png"}]
+    data = pad4(data + png)
+    doc["buffers"] = [{"byteLength": len(data)}]
+    js = pad4(json.dumps(doc, separators=(",", ":")).encode(), b" ")
+    chunks = struct.pack("<I4s", len(js), b"JSON") + js + struct.pack("<I4s", len(data), b"BIN\0") + data
+    return struct.pack("<4sII", b"glTF", 2, 12 + len(chunks)) + chunks
+
+
+def cube_stl(binary):
+    """The cube's 12 triangles as STL, in the OBJ's order, each with its face normal."""
+    tris = cube_triangles()
+    if binary:
+        header = ("binary STL: " + GENERATED).encode()[:80].ljust(80, b" ")
+        body = b"".join(struct.pack("<12fH", *n, *p[0], *p[1], *p[2], 0) for p, _, n in tris)
+        return header + struct.pack("<I", len(tris)) + body
+    out = ["solid cube\n"]
+    for p, _, n in tris:
+        out.append(f"  facet normal {vec(n)}\n    outer loop\n")
+        out += [f"      vertex {vec(v)}\n" for v in p]
+        out.append("    endloop\n  endfacet\n")
+    out.append("endsolid cube\n")
+    return "".join(out).encode()
+
+
 # ------------------------------------------------------------------ Cornell box
 # Cornell box: the room is the exact box x in [-1, 1], y in [0, 1.99], z in [-1, 1], open at z = -1.
 # The two blocks and the light use the published Cornell box measurements (millimetres; room about
@@ -381,9 +471,18 @@ def main():
     }
     for name, text in files.items():
         write(os.path.join(a.out, name), text)
-    with open(os.path.join(a.out, "cube_texture.png"), "wb") as f:
-        f.write(png_rgb(TEXTURE_SIZE, TEXTURE_SIZE, texture_pixels()))
-    print(f"wrote {len(files) + 1} files to {a.out}")
+    png = png_rgb(TEXTURE_SIZE, TEXTURE_SIZE, texture_pixels())
+    binaries = {
+        "cube_texture.png": png,
+        "cube_textured.gltf": cube_gltf(False, png),
+        "cube_textured.glb": cube_gltf(True, png),
+        "cube.stl": cube_stl(True),
+        "cube_ascii.stl": cube_stl(False),
+    }
+    for name, data in binaries.items():
+        with open(os.path.join(a.out, name), "wb") as f:
+            f.write(data)
+    print(f"wrote {len(files) + len(binaries)} files to {a.out}")
 
 
 if __name__ == "__main__":

@@ -16,7 +16,7 @@ use crate::perf::render_race::{RenderRaceOptions, SceneRace};
 /// Arguments of `rtdiff bench`.
 #[derive(clap::Args, Debug)]
 pub struct BenchArgs {
-    /// Scene files, or OBJ meshes (normalised to the unit sphere); default
+    /// Scene files, or meshes (.obj, .ply, .gltf, .glb, .stl; normalised to the unit sphere); default
     /// assets/dragon_87k.obj and assets/dragon_full.obj when present.
     pub scenes: Vec<PathBuf>,
     /// Timed runs per measurement (the median is reported; 1 to 10000).
@@ -208,7 +208,7 @@ fn race(args: &BenchArgs, rounds: usize) -> Result<()> {
     if let Some(path) = &args.json {
         let run = RaceRun { meshes: &meshes, renders: &renders, threads: &args.threads, rounds };
         let text = serde_json::to_string_pretty(&run).map_err(|e| Error::Invalid(e.to_string()))?;
-        std::fs::write(path, text).map_err(|e| Error::file(path, format!("cannot write: {e}")))?;
+        crate::output::write(path, text)?;
     }
     Ok(())
 }

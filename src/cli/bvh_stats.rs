@@ -10,7 +10,7 @@ use crate::error::{Error, Result};
 /// Arguments of `rtdiff bvh-stats`.
 #[derive(clap::Args, Debug)]
 pub struct BvhStatsArgs {
-    /// Scene: a scene JSON file, or a mesh (.obj, .ply, optionally .gz) used as is.
+    /// Scene: a scene JSON file, or a mesh (.obj, .ply, .gltf, .glb, .stl, optionally .gz) used as is.
     pub scene: PathBuf,
     /// Builders to report (all when none is given).
     #[arg(long, value_enum)]

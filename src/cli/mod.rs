@@ -3,6 +3,7 @@
 
 pub mod bench;
 pub mod bvh_stats;
+pub mod campaign;
 pub mod check_image;
 pub mod compare;
 pub mod debug;

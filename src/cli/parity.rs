@@ -29,7 +29,7 @@ fn parse_rays(s: &str) -> std::result::Result<RaySelection, String> {
 /// Arguments of `rtdiff parity`.
 #[derive(clap::Args, Debug)]
 pub struct ParityArgs {
-    /// Scene: a scene .json file, or a mesh: .obj, .ply, optionally .gz (normalised to the unit sphere).
+    /// Scene: a scene .json file, or a mesh: .obj, .ply, .gltf, .glb, .stl, optionally .gz (normalised to the unit sphere).
     pub scene: PathBuf,
     /// Ray set to run: all, primary, incoherent, shadow, edges, vertices, grazing, axis, surface, scaled
     /// (`all` adds the numerical stress report).

@@ -146,7 +146,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if let Some(p) = &args.stats {
         let json =
             serde_json::to_string_pretty(st).map_err(|e| Error::file(p, format!("cannot serialise stats: {e}")))?;
-        std::fs::write(p, json).map_err(|e| Error::file(p, format!("cannot write stats: {e}")))?;
+        crate::output::write(p, json)?;
     }
     if !args.quiet {
         eprintln!(

@@ -11,8 +11,8 @@ use crate::rays::file::{read_rays, write_hits};
 /// Arguments of `rtdiff trace`.
 #[derive(clap::Args, Debug)]
 pub struct TraceArgs {
-    /// Scene: a scene .json file, or a mesh: .obj, .ply, optionally .gz, in the file's own coordinates
-    /// (as `rtdiff rays` and `rtdiff judge` take it; --normalize: on the unit sphere, as `rtdiff parity`).
+    /// Scene: a scene .json file, or a mesh: .obj, .ply, .gltf, .glb, .stl, optionally .gz, in the file's own
+    /// coordinates (as `rtdiff rays` and `rtdiff judge` take it; --normalize: on the unit sphere, as `rtdiff parity`).
     pub scene: PathBuf,
     /// Normalise a mesh to the unit sphere first, as `rtdiff parity` and `rtdiff bench` do.
     #[arg(long)]

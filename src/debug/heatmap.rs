@@ -16,7 +16,7 @@ use super::text::{draw_text, text_width};
 use crate::accel::Tracer;
 use crate::backends::{AccelConfig, Backend};
 use crate::bvh::{BvhTracer, TraversalCounts};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::geometry::{Hit, Ray};
 use crate::integrator::{Counters, Whitted};
 use crate::render::{RenderOptions, progress_bar, render_pixel, with_threads};
@@ -223,7 +223,8 @@ impl Heatmap {
 
     /// Write [`Self::image`] as PNG.
     pub fn write_png(&self, metric: Metric, scale_max: Option<u64>, path: &Path) -> Result<()> {
-        self.image(metric, scale_max).save(path).map_err(|e| Error::file(path, format!("cannot write PNG: {e}")))
+        let img = self.image(metric, scale_max);
+        crate::film::io::write_rgb8_png(img.as_raw(), img.width(), img.height(), path)
     }
 
     /// Write the counts as a linear float EXR with channels `nodes`,
@@ -241,9 +242,11 @@ impl Heatmap {
         // leaves the chunk order to the writer's threads).
         let layer =
             Layer::new(size, LayerAttributes::named("counts"), crate::film::io::DETERMINISTIC_EXR_ENCODING, channels);
+        let mut bytes = std::io::Cursor::new(Vec::new());
         Image::from_layer(layer)
             .write()
-            .to_file(path)
-            .map_err(|e| crate::error::Error::file(path, format!("cannot write EXR: {e}")))
+            .to_buffered(&mut bytes)
+            .map_err(|e| crate::error::Error::file(path, format!("cannot encode EXR: {e}")))?;
+        crate::output::write(path, bytes.into_inner())
     }
 }

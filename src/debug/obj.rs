@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::lines::Lines;
-use crate::error::{Error, Result};
+use crate::error::Result;
 
 /// The OBJ text of `lines`, with `comment` in its header.
 pub fn to_obj(lines: &Lines, comment: &str) -> String {
@@ -29,7 +29,7 @@ pub fn to_obj(lines: &Lines, comment: &str) -> String {
 
 /// Write `lines` to `path` as OBJ.
 pub fn write_obj(lines: &Lines, comment: &str, path: &Path) -> Result<()> {
-    std::fs::write(path, to_obj(lines, comment)).map_err(|e| Error::file(path, format!("cannot write OBJ: {e}")))
+    crate::output::write(path, to_obj(lines, comment))
 }
 
 #[cfg(test)]

@@ -153,10 +153,11 @@ pub fn encode_exr(img: &Image) -> std::result::Result<Vec<u8>, exr::error::Error
     Ok(bytes.into_inner())
 }
 
-/// Write `img` as a byte-deterministic linear float32 RGB EXR (see [`encode_exr`]).
+/// Write `img` as a byte-deterministic linear float32 RGB EXR (see [`encode_exr`]), whole or not
+/// at all ([`crate::output`]).
 pub fn write_exr(img: &Image, path: &Path) -> Result<()> {
     let bytes = encode_exr(img).map_err(|e| Error::file(path, format!("cannot encode EXR: {e}")))?;
-    std::fs::write(path, bytes).map_err(|e| Error::file(path, format!("cannot write EXR: {e}")))
+    crate::output::write(path, bytes)
 }
 
 /// Write `img` as an 8-bit sRGB-encoded PNG (values clamped to [0, 1]).
@@ -164,10 +165,20 @@ pub fn write_png(img: &Image, path: &Path) -> Result<()> {
     write_rgb8_png(&img.to_srgb8(), img.width, img.height, path)
 }
 
-/// Write row-major 8-bit RGB bytes (already display-encoded) as a PNG.
+/// Encode row-major 8-bit RGB bytes (already display-encoded) as a PNG in memory.
+pub fn encode_rgb8_png(rgb: &[u8], width: u32, height: u32) -> image::ImageResult<Vec<u8>> {
+    use image::ImageEncoder;
+    let mut bytes = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut bytes).write_image(rgb, width, height, image::ExtendedColorType::Rgb8)?;
+    Ok(bytes)
+}
+
+/// Write row-major 8-bit RGB bytes (already display-encoded) as a PNG, whole or not at all
+/// ([`crate::output`]).
 pub fn write_rgb8_png(rgb: &[u8], width: u32, height: u32, path: &Path) -> Result<()> {
-    image::save_buffer(path, rgb, width, height, image::ColorType::Rgb8)
-        .map_err(|e| Error::file(path, format!("cannot write PNG: {e}")))
+    let bytes =
+        encode_rgb8_png(rgb, width, height).map_err(|e| Error::file(path, format!("cannot encode PNG: {e}")))?;
+    crate::output::write(path, bytes)
 }
 
 #[cfg(test)]

@@ -1,11 +1,11 @@
 //! Hostile-input fuzzing through the library, in-process.
 //!
 //! Input number `i` of seed `s` is rebuilt exactly by [`generate`] from the
-//! corpus of real files (the scenes, meshes, MTL files and texture in
+//! corpus of real files (the scenes, OBJ, glTF, GLB and STL meshes, MTL files and texture in
 //! `scenes/`, a ray CSV and the command-line flags): first a truncation of
 //! every base file at every byte, then random mutations ([`mutate`]).
 //! [`Runner::run`] feeds one input to the loader the product uses (scene,
-//! OBJ + MTL, texture, ray CSV, clap's flag parser) and, when it is accepted
+//! OBJ + MTL, glTF, GLB, STL, texture, ray CSV, clap's flag parser) and, when it is accepted
 //! and cheap, on through the BVH build, a tiny render, a trace or a parity
 //! run. A refusal must carry a message naming the file; a panic is caught by
 //! the caller (`examples/fuzz_inputs.rs` runs the inputs in a supervised child
@@ -35,6 +35,12 @@ pub enum Kind {
     Mtl,
     /// A PNG texture.
     Texture,
+    /// A glTF 2.0 JSON file (its buffer a data URI, its texture the PNG beside it).
+    Gltf,
+    /// A binary glTF (GLB) file with its texture inside.
+    Glb,
+    /// An STL file (binary or ASCII).
+    Stl,
     /// A ray CSV file for `rtdiff trace`.
     Rays,
     /// Command-line flags of a subcommand.
@@ -43,7 +49,8 @@ pub enum Kind {
 
 impl Kind {
     /// Every kind, in report order.
-    pub const ALL: [Kind; 6] = [Kind::Scene, Kind::Obj, Kind::Mtl, Kind::Texture, Kind::Rays, Kind::Flags];
+    pub const ALL: [Kind; 9] =
+        [Kind::Scene, Kind::Obj, Kind::Mtl, Kind::Texture, Kind::Gltf, Kind::Glb, Kind::Stl, Kind::Rays, Kind::Flags];
 
     /// Lower-case name.
     pub fn name(self) -> &'static str {
@@ -52,6 +59,9 @@ impl Kind {
             Kind::Obj => "obj",
             Kind::Mtl => "mtl",
             Kind::Texture => "texture",
+            Kind::Gltf => "gltf",
+            Kind::Glb => "glb",
+            Kind::Stl => "stl",
             Kind::Rays => "rays",
             Kind::Flags => "flags",
         }
@@ -64,6 +74,9 @@ impl Kind {
             Kind::Obj => "mesh.obj",
             Kind::Mtl => "mesh.mtl",
             Kind::Texture => "texture.png",
+            Kind::Gltf => "mesh.gltf",
+            Kind::Glb => "mesh.glb",
+            Kind::Stl => "mesh.stl",
             Kind::Rays => "rays.csv",
             Kind::Flags => "flags.txt",
         }
@@ -128,6 +141,14 @@ impl Corpus {
         }
         let png = "scenes/meshes/cube_texture.png";
         files.push((Kind::Texture, png.into(), read(root.join(png))?));
+        for (kind, m) in [
+            (Kind::Gltf, "cube_textured.gltf"),
+            (Kind::Glb, "cube_textured.glb"),
+            (Kind::Stl, "cube.stl"),
+            (Kind::Stl, "cube_ascii.stl"),
+        ] {
+            files.push((kind, format!("scenes/meshes/{m}"), read(root.join("scenes/meshes").join(m))?));
+        }
         files.push((Kind::Rays, "rays.csv".into(), BASE_RAYS.as_bytes().to_vec()));
         Ok(Self { files })
     }
@@ -222,10 +243,13 @@ pub fn generate(corpus: &Corpus, seed: u64, index: u64) -> Input {
     let mut rng = Pcg32::new(mix64(seed), index);
     let r = rng.below(100);
     let kind = match r {
-        0..40 => Kind::Scene,
-        40..50 => Kind::Obj,
-        50..58 => Kind::Mtl,
-        58..66 => Kind::Texture,
+        0..34 => Kind::Scene,
+        34..42 => Kind::Obj,
+        42..48 => Kind::Mtl,
+        48..54 => Kind::Texture,
+        54..59 => Kind::Gltf,
+        59..62 => Kind::Glb,
+        62..66 => Kind::Stl,
         66..80 => Kind::Rays,
         _ => Kind::Flags,
     };
@@ -237,7 +261,7 @@ pub fn generate(corpus: &Corpus, seed: u64, index: u64) -> Input {
     let mut b = bytes.clone();
     let how = if kind == Kind::Texture && rng.below(4) == 0 {
         huge_png_header(&mut b, &mut rng)
-    } else if kind == Kind::Scene && rng.below(2) == 0 {
+    } else if matches!(kind, Kind::Scene | Kind::Gltf) && rng.below(2) == 0 {
         mutate::json(&mut b, &mut rng)
     } else {
         mutate::bytes(&mut b, &mut rng)
@@ -315,7 +339,9 @@ impl Runner {
     /// Path an input of `kind` is written to.
     pub fn path_of(&self, kind: Kind) -> PathBuf {
         match kind {
-            Kind::Obj | Kind::Mtl => self.dir.join("meshes").join(kind.file_name()),
+            Kind::Obj | Kind::Mtl | Kind::Gltf | Kind::Glb | Kind::Stl => {
+                self.dir.join("meshes").join(kind.file_name())
+            }
             _ => self.dir.join(kind.file_name()),
         }
     }
@@ -361,7 +387,12 @@ impl Runner {
                 crate::mesh::load_mesh(&self.path_of(Kind::Obj), crate::mesh::Content::WithMaterials)
                     .map(|_| Outcome::Accepted { ran: false })
             }
-            Kind::Obj | Kind::Mtl => self.obj(&self.path_of(Kind::Obj)),
+            Kind::Obj | Kind::Mtl => self.mesh(&self.path_of(Kind::Obj)),
+            Kind::Gltf | Kind::Glb | Kind::Stl if !deep => {
+                crate::mesh::load_mesh(&path, crate::mesh::Content::WithMaterials)
+                    .map(|_| Outcome::Accepted { ran: false })
+            }
+            Kind::Gltf | Kind::Glb | Kind::Stl => self.mesh(&path),
             Kind::Texture => crate::texture::Texture::load(&path, false).map(|_| Outcome::Accepted { ran: false }),
             Kind::Rays => self.rays(&path),
             Kind::Flags => return self.flags(&input.args(), deep),
@@ -397,9 +428,17 @@ impl Runner {
         Ok(Outcome::Accepted { ran: true })
     }
 
-    fn obj(&self, path: &Path) -> Result<Outcome> {
-        // As `render` loads it (materials and their textures), then as `parity` does.
-        crate::mesh::load_mesh(path, crate::mesh::Content::WithMaterials)?;
+    fn mesh(&self, path: &Path) -> Result<Outcome> {
+        // As `render` loads it (materials and their textures, embedded ones included), then as
+        // `parity` does.
+        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+        let json = format!(
+            r#"{{ "image": {{ "width": 3, "height": 3 }}, "features": {{ "texture_mapping": true }},
+                 "meshes": [ {{ "file": "{name}", "normalize": true }} ] }}"#
+        );
+        let scene = path.with_file_name("mesh_scene.json");
+        std::fs::write(&scene, json).map_err(|e| Error::io(&scene, &e))?;
+        self.scene(&scene, &Overrides::default(), None)?;
         let ctx = crate::rays::load_context(path)?;
         let opts = crate::verify::hits::ParityOptions {
             sets: crate::rays::SetKind::ALL.to_vec(),

@@ -1,12 +1,15 @@
-//! Triangle meshes as users have them: Wavefront OBJ (+ MTL) and PLY, plain or
-//! gzip-compressed, in any of the text encodings exporters write. [`load_mesh`] is the
-//! one entry point; every reader returns the in-memory [`Mesh`] defined here.
+//! Triangle meshes as users have them: Wavefront OBJ (+ MTL), PLY, glTF 2.0 (`.gltf`,
+//! `.glb`) and STL, plain or gzip-compressed, in any of the text encodings exporters
+//! write. [`load_mesh`] is the one entry point; every reader returns the in-memory
+//! [`Mesh`] defined here.
 
 pub mod compressed;
 pub mod encoding;
+pub mod gltf;
 pub mod mtl;
 pub mod obj;
 pub mod ply;
+pub mod stl;
 
 use std::path::{Path, PathBuf};
 
@@ -30,6 +33,10 @@ pub enum Format {
     Obj,
     /// Stanford PLY (`.ply`, `.ply.gz`), ASCII or binary.
     Ply,
+    /// glTF 2.0: `.gltf` (JSON, with `.bin` files or data URIs) or `.glb` (binary).
+    Gltf,
+    /// STL (`.stl`, `.stl.gz`), ASCII or binary.
+    Stl,
 }
 
 impl Format {
@@ -39,20 +46,23 @@ impl Format {
         match inner.extension()?.to_str()?.to_ascii_lowercase().as_str() {
             "obj" => Some(Self::Obj),
             "ply" => Some(Self::Ply),
+            "gltf" | "glb" => Some(Self::Gltf),
+            "stl" => Some(Self::Stl),
             _ => None,
         }
     }
 }
 
-/// True when `path` names a mesh file rtdiff reads (`.obj`, `.ply`, either with `.gz`).
+/// True when `path` names a mesh file rtdiff reads (`.obj`, `.ply`, `.gltf`, `.glb`, `.stl`, any with `.gz`).
 pub fn is_mesh_file(path: &Path) -> bool {
     Format::of(path).is_some()
 }
 
-/// Load the mesh at `path` (OBJ or PLY, optionally gzip-compressed). Faces are triangulated
-/// as fans from their first vertex, in file order: triangle `i` of [`Mesh::indices`] is the
-/// `i`-th triangle of the file, which is its primitive id in every output. Zero-area triangles
-/// are kept in place (no ray hits them) and counted in [`Mesh::zero_area`]. Errors name the file and, for text, the line and token;
+/// Load the mesh at `path` (OBJ, PLY, glTF, GLB or STL, optionally gzip-compressed). Faces are
+/// triangulated as fans from their first vertex, in file order: triangle `i` of [`Mesh::indices`]
+/// is the `i`-th triangle of the file, which is its primitive id in every output. Zero-area
+/// triangles are kept in place (no ray hits them) and counted in [`Mesh::zero_area`]. Errors name
+/// the file and, for text, the line and token;
 /// problems with materials are [`Mesh::warnings`], never errors.
 pub fn load_mesh(path: &Path, content: Content) -> Result<Mesh> {
     if let Err(e) = std::fs::metadata(path) {
@@ -65,16 +75,19 @@ pub fn load_mesh(path: &Path, content: Content) -> Result<Mesh> {
     let format = match Format::of(path) {
         Some(f) => f,
         None if bytes.starts_with(b"ply") => Format::Ply,
+        None if bytes.starts_with(b"glTF") => Format::Gltf,
         None => {
             return Err(Error::file(
                 path,
-                "unsupported mesh file: expected a Wavefront .obj or a Stanford .ply (either may end in .gz)",
+                "unsupported mesh file: expected .obj, .ply, .gltf, .glb or .stl (any may end in .gz)",
             ));
         }
     };
     let mesh = match format {
         Format::Obj => obj::load(path, encoding::decode_text(bytes).0, content),
         Format::Ply => ply::load(path, &bytes, content),
+        Format::Gltf => gltf::load(path, &bytes, content),
+        Format::Stl => stl::load(path, &bytes),
     }?;
     if mesh.indices.len() > crate::limits::MAX_PRIMITIVES {
         return Err(Error::file(
@@ -115,6 +128,20 @@ pub struct MtlMaterial {
     pub map_kd: Option<PathBuf>,
     /// Where `map_kd` was written, when it came from an MTL file.
     pub map_kd_source: Option<TextureSource>,
+    /// A diffuse texture held in the mesh file itself (a glTF data URI or buffer view).
+    pub map_kd_embedded: Option<EmbeddedImage>,
+    /// A colour the texture's texels are multiplied by (glTF's base colour factor; an MTL's
+    /// `map_Kd` replaces `Kd`, so `None` there).
+    pub kd_texture_factor: Option<Vec3>,
+}
+
+/// An encoded image (PNG, JPEG) held inside a mesh file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EmbeddedImage {
+    /// Its name in errors: `file.glb#images[0]`.
+    pub name: String,
+    /// The encoded bytes.
+    pub bytes: std::sync::Arc<Vec<u8>>,
 }
 
 /// An indexed triangle mesh. `normals` and `uvs`, when present, are indexed like `positions`.

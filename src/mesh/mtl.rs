@@ -261,6 +261,7 @@ pub(crate) fn convert(m: tobj::Material, mtl: &Path, source: Option<&(usize, Str
         opacity,
         map_kd,
         map_kd_source,
+        ..Default::default()
     }
 }
 

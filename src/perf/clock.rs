@@ -71,6 +71,22 @@ pub fn timed<T>(runs: usize, cpu_time: bool, mut f: impl FnMut() -> T) -> (f64, 
     (median(times), first)
 }
 
+/// CPU seconds the whole process has used so far (user and system, every thread); 0 where the
+/// platform does not say.
+pub fn process_cpu_seconds() -> f64 {
+    #[cfg(unix)]
+    {
+        // SAFETY: an all-zero rusage is a valid value for getrusage to overwrite.
+        let mut ru: libc::rusage = unsafe { std::mem::zeroed() };
+        // SAFETY: ru is a valid, writable rusage.
+        if unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut ru) } == 0 {
+            let t = |v: libc::timeval| v.tv_sec as f64 + v.tv_usec as f64 * 1e-6;
+            return t(ru.ru_utime) + t(ru.ru_stime);
+        }
+    }
+    0.0
+}
+
 /// Thread CPU seconds of one call of `f`.
 pub fn cpu_seconds<T>(f: impl FnOnce() -> T) -> (f64, T) {
     let clock = Clock { cpu: true };

@@ -77,7 +77,7 @@ pub fn sweep(root: &Path, jobs: &[SweepJob], work: &Path, mut tick: impl FnMut()
     let jobs_path = work.join("mitsuba-jobs.json");
     let text = serde_json::to_string(&serde_json::json!({ "renders": jobs }))
         .map_err(|e| Error::file(&jobs_path, format!("cannot serialise: {e}")))?;
-    std::fs::write(&jobs_path, text).map_err(|e| Error::file(&jobs_path, format!("cannot write: {e}")))?;
+    crate::output::write(&jobs_path, text)?;
     let mut child = Command::new(&py)
         .arg(&script)
         .arg(&jobs_path)

@@ -15,6 +15,7 @@ pub mod mitsuba_python;
 pub mod progress;
 pub mod race;
 pub mod render_race;
+pub mod speed;
 pub mod stability;
 pub mod summary;
 pub mod table;

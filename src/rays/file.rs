@@ -94,7 +94,7 @@ pub fn write_hits(path: &Path, hits: &[Option<Hit>]) -> Result<()> {
             None => out.push_str("0,,,,\n"),
         }
     }
-    std::fs::write(path, out).map_err(|e| Error::file(path, format!("cannot write: {e}")))
+    crate::output::write(path, out)
 }
 
 /// One set of rays to write: its name, rays and tags.

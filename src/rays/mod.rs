@@ -25,7 +25,7 @@ use std::sync::Arc;
 use crate::error::{Error, Result};
 use crate::geometry::Primitives;
 
-/// A mesh (`.obj`, `.ply`, optionally `.gz`) normalised to the unit sphere (mean of the vertices at the
+/// A mesh (`.obj`, `.ply`, `.gltf`, `.glb`, `.stl`, optionally `.gz`) normalised to the unit sphere (mean of the vertices at the
 /// origin, farthest vertex at distance 1) by
 /// [`crate::geometry::normalize_to_unit_sphere`], the same function a scene's
 /// `"normalize": true` uses: `bench`, `parity`, `trace` and `render` trace the
@@ -49,7 +49,7 @@ pub fn load_normalized_mesh_counted(path: &Path) -> Result<(Arc<Primitives>, usi
 
 /// The scene a harness command runs on: a scene file (`.json`, through
 /// [`crate::scene::Scene::load`]: its primitives, camera, image size and
-/// lights), or a mesh (`.obj`, `.ply`, optionally `.gz`) normalised by [`load_normalized_mesh`] with the
+/// lights), or a mesh (`.obj`, `.ply`, `.gltf`, `.glb`, `.stl`, optionally `.gz`) normalised by [`load_normalized_mesh`] with the
 /// default camera and point light.
 pub fn load_context(path: &Path) -> Result<RayContext> {
     load_context_counted(path).map(|(ctx, _)| ctx)
@@ -83,7 +83,7 @@ pub fn load_context_counted(path: &Path) -> Result<(RayContext, usize)> {
         }
         _ => Err(Error::file(
             path,
-            "unsupported scene file: expected a scene .json or an .obj/.ply mesh (optionally .gz)",
+            "unsupported scene file: expected a scene .json or a mesh: .obj, .ply, .gltf, .glb, .stl (optionally .gz)",
         )),
     }
 }
@@ -122,7 +122,7 @@ pub fn load_context_file_coordinates(path: &Path) -> Result<(RayContext, usize)>
     Ok((ctx, mesh.zero_area))
 }
 
-/// Load the primitives of `path`: a mesh (`.obj`, `.ply`, optionally `.gz`; with `normalize`, through
+/// Load the primitives of `path`: a mesh (`.obj`, `.ply`, `.gltf`, `.glb`, `.stl`, optionally `.gz`; with `normalize`, through
 /// [`load_normalized_mesh`]; otherwise as is), anything else as a scene file.
 pub fn load_primitives(path: &Path, normalize: bool) -> Result<Arc<Primitives>> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);

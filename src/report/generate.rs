@@ -60,7 +60,7 @@ pub struct Generated {
 }
 
 fn write(path: &Path, text: &str, files: &mut Vec<PathBuf>) -> Result<()> {
-    std::fs::write(path, text).map_err(|e| Error::file(path, format!("cannot write: {e}")))?;
+    crate::output::write(path, text)?;
     files.push(path.to_path_buf());
     Ok(())
 }

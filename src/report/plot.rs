@@ -197,7 +197,8 @@ pub fn categories(path: &Path, title: &str, y_desc: &str, labels: &[String], ser
     let y1 = legend_headroom(y0, y1, series.len());
     let n = labels.len().max(1);
     let width = (140 + 95 * n as u32).max(700);
-    let root = SVGBackend::new(path, (width, 520)).into_drawing_area();
+    let mut svg = String::new();
+    let root = SVGBackend::with_string(&mut svg, (width, 520)).into_drawing_area();
     root.fill(&WHITE).map_err(plot_err(path))?;
     let mut chart = ChartBuilder::on(&root)
         .caption(title, ("sans-serif", 20))
@@ -258,7 +259,9 @@ pub fn categories(path: &Path, title: &str, y_desc: &str, labels: &[String], ser
         .draw()
         .map_err(plot_err(path))?;
     root.present().map_err(plot_err(path))?;
-    Ok(())
+    drop(chart);
+    drop(root);
+    crate::output::write(path, svg)
 }
 
 /// Corner of the legend.
@@ -326,7 +329,8 @@ pub fn panels(path: &Path, panels: &[Panel], notes: &[String]) -> Result<()> {
     let note_lines: Vec<String> = notes.iter().flat_map(|n| wrap(n, NOTE_CHARS * panels.len().max(1))).collect();
     let notes_height = if note_lines.is_empty() { 0 } else { 12 + NOTE_LINE * note_lines.len() as u32 };
     let size = (PANEL_WIDTH * panels.len().max(1) as u32, PANEL_HEIGHT + notes_height);
-    let root = SVGBackend::new(path, size).into_drawing_area();
+    let mut svg = String::new();
+    let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
     root.fill(&WHITE).map_err(plot_err(path))?;
     let (charts, under) = root.split_vertically(PANEL_HEIGHT);
     let areas = charts.split_evenly((1, panels.len().max(1)));
@@ -339,7 +343,8 @@ pub fn panels(path: &Path, panels: &[Panel], notes: &[String]) -> Result<()> {
             .map_err(plot_err(path))?;
     }
     root.present().map_err(plot_err(path))?;
-    Ok(())
+    drop((charts, under, areas, root));
+    crate::output::write(path, svg)
 }
 
 fn draw_panel<DB: DrawingBackend>(path: &Path, area: &DrawingArea<DB, plotters::coord::Shift>, p: &Panel) -> Result<()>

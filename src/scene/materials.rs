@@ -33,6 +33,17 @@ impl TextureCache {
         self.loaded.insert(key, t.clone());
         Ok(t)
     }
+
+    /// A texture embedded in a mesh file (sRGB-decoded), once per name.
+    fn embedded(&mut self, img: &crate::mesh::EmbeddedImage) -> Result<Arc<Texture>> {
+        let key = (PathBuf::from(&img.name), false);
+        if let Some(t) = self.loaded.get(&key) {
+            return Ok(t.clone());
+        }
+        let t = Arc::new(Texture::from_memory(&img.bytes, Path::new(&img.name), false)?);
+        self.loaded.insert(key, t.clone());
+        Ok(t)
+    }
 }
 
 /// The materials of a scene being built; index 0 is the default material.
@@ -91,11 +102,20 @@ impl<'f> MaterialTable<'f> {
 
     /// Add a material read from an MTL library (in the scene's shading model); returns its index.
     pub(crate) fn add_mtl(&mut self, m: &MtlMaterial) -> Result<u32> {
-        let kd_texture = match (&m.map_kd, &m.map_kd_source) {
-            (Some(p), Some(src)) => Some(self.textures.load(p, false).map_err(|e| texture_error(src, e))?),
-            (Some(p), None) => Some(self.textures.load(p, false)?),
+        let mut kd_texture = match (&m.map_kd, &m.map_kd_source, &m.map_kd_embedded) {
+            (Some(p), Some(src), _) => Some(self.textures.load(p, false).map_err(|e| texture_error(src, e))?),
+            (Some(p), None, _) => Some(self.textures.load(p, false)?),
+            (None, _, Some(img)) => Some(self.textures.embedded(img)?),
             _ => None,
         };
+        // glTF multiplies the texture by the base colour factor.
+        if let (Some(t), Some(f)) = (&kd_texture, m.kd_texture_factor)
+            && f != Vec3::ONE
+        {
+            let mut scaled = (**t).clone();
+            scaled.texels.iter_mut().for_each(|c| *c *= f);
+            kd_texture = Some(Arc::new(scaled));
+        }
         self.materials.push(Material {
             name: m.name.clone(),
             kd: m.kd.unwrap_or(Vec3::ONE),

@@ -19,7 +19,6 @@
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3};
@@ -123,7 +122,7 @@ pub fn export_mitsuba(scene: &Scene, lights: &[LightSpec], dir: &Path) -> Result
 }
 
 fn write_text(path: &Path, text: String) -> Result<()> {
-    std::fs::write(path, text).map_err(|e| Error::file(path, format!("cannot write: {e}")))
+    crate::output::write(path, text)
 }
 
 /// Triangles grouped by (material, textured), groups in order of first use.
@@ -359,8 +358,7 @@ fn write_ply(scene: &Scene, triangles: &[usize], path: &Path) -> Result<()> {
             out.extend_from_slice(&(3 * i + k).to_le_bytes());
         }
     }
-    let mut f = std::fs::File::create(path).map_err(|e| Error::file(path, format!("cannot create: {e}")))?;
-    f.write_all(&out).map_err(|e| Error::file(path, format!("cannot write: {e}")))
+    crate::output::write(path, out)
 }
 
 fn sidecar(
