@@ -10,6 +10,8 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use common::checks::{FDR, exact_check, numerically_black, summary, welch_summary};
+use common::references::{load, no_tweak, reference};
 use common::{root, run};
 
 use glam::Vec3;
@@ -17,6 +19,7 @@ use rtdiff::backends;
 use rtdiff::film::Image;
 use rtdiff::render::{RenderOptions, render};
 use rtdiff::scene::{Overrides, Scene};
+use rtdiff::verify::image::stats::{Moments, WelchOptions, variance_test, welch_test};
 
 fn python() -> Option<PathBuf> {
     common::venv_python("mitsuba_live")
@@ -201,10 +204,22 @@ fn export_bad_input_is_a_clear_error() {
 /// reference/ is what the current plugin and exporter make: regenerate a deterministic
 /// reference (monkey: interpolated normals, Ks 0.5 mirrors, the spawn rule) and a noisy one
 /// (cube: segment light, 64 seeds, mean and variance) with scripts/mitsuba/make_references.py
-/// and compare them with the stored images. Same seeds give the same random numbers
-/// (Mitsuba's PCG32 is integer arithmetic); only float rounding may differ between CPUs
-/// (LLVM picks the host's vector width and FMA), so pixels must agree to 1e-5 relative
-/// (floor 1e-3) rather than byte for byte.
+/// and judge them against the stored images by what may differ between CPUs (docs/oracles.md,
+/// "Regenerating reference/ on another CPU"): the same seeds give the same random numbers
+/// (Mitsuba's PCG32 is integer arithmetic), but LLVM picks the host's vector width and FMA and
+/// Embree its kernels, so float rounding differs, and in a noisy image a rounding can flip a
+/// sample (a shadow ray at an edge), which moves a 64-seed mean by far more than rounding.
+///
+/// - a deterministic image must pass the exact check that judges rtdiff against it (99.9% of
+///   pixels within 1e-3 relative, every other pixel classified): float32 rounding of the <= ~100
+///   operations behind a pixel is gamma(100) = 6e-6 relative, times at most the Phong exponent
+///   where a highlight is sampled (250 on monkey: 1.5e-3 in the worst case), which is the
+///   classifier's terminator class; measured as an AVX2 CPU: 5.2e-4 (monkey.phong);
+/// - a noisy mean is judged by Welch's test against the stored mean with both images' own
+///   variances over K = 64 seeds, Benjamini-Hochberg at q = 0.01 (the false-alarm rate for
+///   independent seeds; the same seeds only make it more conservative), pixel-channels below
+///   1e-5 on both sides compared absolutely to 1e-5 (`numerically_black`);
+/// - a variance image by the F-test of the two variances per pixel-channel, BH at q = 0.01.
 #[test]
 fn references_regenerate_from_the_current_plugin() {
     let Some(py) = python() else { return };
@@ -232,34 +247,54 @@ fn references_regenerate_from_the_current_plugin() {
         );
     }
     let mut checked = 0;
+    let mut failures = Vec::new();
     for e in fresh["references"].as_array().unwrap() {
-        if !same_variant && !e["deterministic"].as_bool().unwrap() {
+        let deterministic = e["deterministic"].as_bool().unwrap();
+        if !same_variant && !deterministic {
             continue;
         }
+        let name = format!("{}.{}", e["name"].as_str().unwrap(), e["model"].as_str().unwrap());
         let s = stored["references"]
             .as_array()
             .unwrap()
             .iter()
             .find(|s| s["name"] == e["name"] && s["model"] == e["model"])
             .expect("regenerated reference missing from reference/manifest.json");
-        assert_eq!(e["traced_sha256"], s["traced_sha256"], "{}: the exported scene changed", e["name"]);
-        for key in ["image", "variance"] {
-            let Some(file) = e[key].as_str() else { continue };
-            let (a, b) = (
-                Image::read_exr(&dir.join(file)).unwrap(),
-                Image::read_exr(&root().join("reference").join(file)).unwrap(),
-            );
-            let worst = a
-                .pixels
-                .iter()
-                .zip(&b.pixels)
-                .map(|(p, q)| ((*p - *q).abs() / p.abs().max(q.abs()).max(Vec3::splat(1e-3))).max_element())
-                .fold(0f32, f32::max);
-            println!("{file}: regenerated, max relative difference {worst:.1e}");
-            assert!(worst <= 1e-5, "{file}: the regenerated reference differs by {worst:e} relative");
+        assert_eq!(e["traced_sha256"], s["traced_sha256"], "{name}: the exported scene changed");
+        let image = |d: &Path, key: &str| Image::read_exr(&d.join(e[key].as_str().unwrap())).unwrap();
+        let refdir = root().join("reference");
+        if deterministic {
+            let r = reference(&name);
+            let scene = load(&r, 0, &no_tweak);
+            let x = exact_check(&scene, &image(&refdir, "image"), &image(&dir, "image"));
+            println!("{name}: regenerated, exact check {}", summary(&x));
+            if !x.passed() {
+                failures.push(format!("{name}: {}", summary(&x)));
+            }
             checked += 1;
+            continue;
         }
+        let k = e["seeds"].as_array().unwrap().len() as u32;
+        let moments = |d: &Path| Moments::from_mean_variance(&image(d, "image"), &image(d, "variance"), k).unwrap();
+        let (mut a, mut b) = (moments(&refdir), moments(&dir));
+        numerically_black(&mut a, &mut b);
+        let w = welch_test(&a, &b, &WelchOptions { fdr: FDR, ..Default::default() }).unwrap();
+        let v = variance_test(&a, &b, FDR).unwrap();
+        println!(
+            "{name}: regenerated, mean {}, min p {:.2e}; variance {} of {} rejected, min p {:.2e}, largest ratio {:.6}",
+            welch_summary(&w),
+            w.min_p,
+            v.rejected,
+            v.tests,
+            v.min_p,
+            v.max_ratio
+        );
+        if !w.passed || !v.passed {
+            failures.push(format!("{name}: mean {}; variance {} rejected", welch_summary(&w), v.rejected));
+        }
+        checked += 1;
     }
-    assert_eq!(checked, if same_variant { 6 } else { 2 }, "monkey (2 images) and cube (2 means + 2 variances)");
+    assert!(failures.is_empty(), "regenerated references differ from reference/:\n{}", failures.join("\n"));
+    assert_eq!(checked, if same_variant { 4 } else { 2 }, "monkey and cube, both models");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -46,6 +46,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import sys
 import time
 
 import numpy as np
@@ -64,13 +65,54 @@ def pick_variant(requested: str | None = None) -> str:
 
 
 def setup(variant: str | None = None):
-    """Select the Mitsuba variant and register the plugin; returns the mitsuba module."""
+    """Select the Mitsuba variant and register the plugin; returns the mitsuba module.
+
+    With RTDIFF_MITSUBA_ISA=avx2 (set by scripts/mitsuba/as-avx2.sh) Dr.Jit's LLVM backend
+    compiles for an AVX2 CPU without AVX-512 (see `emulate_isa`)."""
     variant = pick_variant(variant)
     import mitsuba as mi
 
     mi.set_variant(variant)
+    isa = os.environ.get("RTDIFF_MITSUBA_ISA")
+    if isa and variant.startswith("llvm"):
+        emulate_isa(mi, isa)
     _register(mi)
     return mi
+
+
+#: LLVM target CPU standing for each emulated instruction set.
+EMULATED_CPUS = {"avx2": ("haswell", 8)}
+
+
+def emulate_isa(mi, isa: str):
+    """Make Dr.Jit's LLVM backend generate code as on a CPU with instruction set `isa` (only
+    "avx2": target CPU haswell, 8-wide vectors, every AVX-512, AVX10 and AMX feature of the
+    host's list switched off), through drjit-core's `jit_llvm_set_target`, which the Python
+    module does not expose. Embree inside Mitsuba picks its own kernels: scripts/mitsuba/as-avx2.sh
+    caps those with Embree's `max_isa` option. Prints the target to stderr."""
+    import ctypes
+
+    import drjit as dr
+
+    if isa not in EMULATED_CPUS:
+        raise ValueError(f"RTDIFF_MITSUBA_ISA={isa!r}: only {sorted(EMULATED_CPUS)} can be emulated")
+    cpu, width = EMULATED_CPUS[isa]
+    core = ctypes.CDLL(os.path.join(os.path.dirname(dr.__file__), "libdrjit-core.so"))
+    # C++ linkage: jit_llvm_set_target(const char*, const char*, uint32_t) and its getters.
+    set_target = core._Z19jit_llvm_set_targetPKcS0_j
+    set_target.argtypes = [ctypes.c_char_p, ctypes.c_char_p, ctypes.c_uint32]
+    get_features = core._Z24jit_llvm_target_featuresv
+    get_features.restype = ctypes.c_char_p
+    get_cpu = core._Z19jit_llvm_target_cpuv
+    get_cpu.restype = ctypes.c_char_p
+    get_width = core._Z21jit_llvm_vector_widthv
+    get_width.restype = ctypes.c_uint32
+    dr.eval(mi.Float(0.0))  # the LLVM backend initialises on first use; the target is set after
+    host = (get_features() or b"").decode()
+    wide = ("+avx512", "+evex512", "+avx10", "+amx")
+    features = ",".join("-" + f[1:] if f.startswith(wide) else f for f in host.split(",") if f)
+    set_target(cpu.encode(), features.encode(), width)
+    print(f"rtdiff_mitsuba: Dr.Jit LLVM target {get_cpu().decode()}, {get_width()}-wide, AVX-512 off", file=sys.stderr)
 
 
 def gamma(n: int) -> float:
