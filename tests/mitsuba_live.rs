@@ -183,6 +183,39 @@ fn bloom_matches_openimageio() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// The exporter says per scene which oracle it wrote and why, on stdout and in the export
+/// (scene.xml's comment, rtdiff.json), and `--oracle native` refuses what Mitsuba cannot express.
+#[test]
+fn export_says_which_oracle_it_wrote_and_why() {
+    let dir = common::temp_dir("live-oracle");
+    let export = |scene: &str, extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_rtdiff"))
+            .arg("export")
+            .arg(root().join("scenes").join(format!("{scene}.json")))
+            .args(["--to", "mitsuba", "--width", "16", "--height", "16", "--model", "physical", "-o"])
+            .arg(dir.join(scene))
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let teapot = export("teapot", &[]);
+    let out = String::from_utf8_lossy(&teapot.stdout);
+    assert!(teapot.status.success() && out.contains("oracle: native (Mitsuba's direct"), "{out}");
+    let cfg = std::fs::read_to_string(dir.join("teapot/rtdiff.json")).unwrap();
+    assert!(cfg.contains("\"oracle\": \"native\""), "{cfg}");
+    let cube = export("cube", &[]);
+    let out = String::from_utf8_lossy(&cube.stdout);
+    assert!(out.contains("oracle: plugin rtdiff_whitted, because: light 1: segment lights"), "{out}");
+    let xml = std::fs::read_to_string(dir.join("cube/scene.xml")).unwrap();
+    assert!(xml.contains("<!-- Oracle: plugin rtdiff_whitted, because: light 1: segment lights"), "{xml}");
+    let refused = export("cube", &["--oracle", "native"]);
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success() && err.contains("segment lights have no Mitsuba emitter"), "{err}");
+    let forced = export("teapot", &["--oracle", "plugin"]);
+    assert!(String::from_utf8_lossy(&forced.stdout).contains("oracle: plugin rtdiff_whitted, because: asked for"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn export_bad_input_is_a_clear_error() {
     let missing = Command::new(env!("CARGO_BIN_EXE_rtdiff"))

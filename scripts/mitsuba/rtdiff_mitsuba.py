@@ -186,7 +186,11 @@ def _register(mi):
             self.bg = self.cfg["background"]
             offset = self.cfg.get("ray_offset", {"kind": "robust"})
             # The reports' fixed offset (origin + epsilon * unit direction), when the scene asks for it.
+            if offset["kind"] not in ("robust", "fixed", "scaled-normal"):
+                raise ValueError(f"{resolved}: unknown ray_offset kind {offset['kind']!r}")
             self.fixed_epsilon = float(offset["epsilon"]) if offset["kind"] == "fixed" else None
+            # Mitsuba's own spawn_ray (epsilon (1 + max|p|) along the normal), when the scene asks for it.
+            self.scaled_epsilon = float(offset["epsilon"]) if offset["kind"] == "scaled-normal" else None
             self._tables = None
 
         # --- per-shape tables ---------------------------------------------------------------
@@ -261,6 +265,8 @@ def _register(mi):
             if self.fixed_epsilon is not None:
                 return p + self.fixed_epsilon * dr.normalize(w)
             n = dr.select(dr.dot(w, ng) < 0.0, -ng, ng)
+            if self.scaled_epsilon is not None:
+                return p + self.scaled_epsilon * (1.0 + dr.max(dr.abs(p))) * n
             po = p + dr.dot(dr.abs(n), err) * n
             return mi.Point3f(step_away(po.x, n.x), step_away(po.y, n.y), step_away(po.z, n.z))
 
@@ -492,8 +498,16 @@ def _register(mi):
 
 
 def load(mi, scene_dir: str):
-    """Load DIR/scene.xml without merging shapes (the integrator maps shape ids to materials)."""
-    return mi.load_file(os.path.join(scene_dir, "scene.xml"), optimize=False)
+    """Load an export. A plugin export: DIR/scene.xml without merging shapes (the integrator maps
+    shape ids to materials). A native export: every scene of its recipe (rtdiff.json "recipe":
+    each emitter file with each BSDF file, through scene.xml's $lights and $bsdfs), as
+    {(lights, bsdfs): scene}."""
+    cfg = config(scene_dir)
+    path = os.path.join(scene_dir, "scene.xml")
+    if cfg.get("oracle") != "native":
+        return mi.load_file(path, optimize=False)
+    recipe = cfg["recipe"]
+    return {(l, b): mi.load_file(path, lights=l, bsdfs=b) for l in recipe["lights"] for b, _ in recipe["terms"]}
 
 
 def config(scene_dir: str) -> dict:
@@ -502,9 +516,15 @@ def config(scene_dir: str) -> dict:
 
 
 def render(mi, scene, cfg: dict, seed: int, passes: int | None = None) -> np.ndarray:
-    """One image (H x W x 3 float32): the mean of `passes` samples per pixel, pixel positions as
-    rtdiff places them (centre for spp 1, n x n jittered grid for n*n, uniform otherwise), each
-    with one lens sample when depth of field is on. `passes` defaults to spp * dof_samples."""
+    """One image (H x W x 3 float32) of an export loaded by `load`.
+
+    Native: Mitsuba's own render loop (`mi.render`) on each scene of the recipe, all with the
+    same seed, summed with the recipe's weights in float64 (`passes` replaces the samples per
+    pixel). Plugin: the mean of `passes` samples per pixel, pixel positions as rtdiff places them
+    (centre for spp 1, n x n jittered grid for n*n, uniform otherwise), each with one lens sample
+    when depth of field is on. `passes` defaults to spp * dof_samples."""
+    if cfg.get("oracle") == "native":
+        return render_native(mi, scene, cfg, seed, passes)
     import drjit as dr
 
     W, H = int(cfg["width"]), int(cfg["height"])
@@ -537,6 +557,20 @@ def render(mi, scene, cfg: dict, seed: int, passes: int | None = None) -> np.nda
         dr.eval(L)
         acc += np.stack([np.array(L[0]), np.array(L[1]), np.array(L[2])], axis=-1).reshape(H, W, 3)
     return (acc / passes).astype(np.float32)
+
+
+def render_native(mi, scenes: dict, cfg: dict, seed: int, spp: int | None = None) -> np.ndarray:
+    """The recipe of a native export: sum over its emitter files and BSDF terms of
+    weight * mi.render(scene, seed), every render with the same seed (the terms of one mirror
+    bounce, 4 L(1/2) - L(1), cancel diffuse interreflection sample by sample)."""
+    recipe = cfg["recipe"]
+    weights = dict((b, w) for b, w in recipe["terms"])
+    spp = spp or int(recipe["spp"])
+    acc = np.zeros((int(cfg["height"]), int(cfg["width"]), 3), dtype=np.float64)
+    for (_, b), scene in scenes.items():
+        img = np.array(mi.render(scene, seed=seed, spp=spp), dtype=np.float64)
+        acc += weights[b] * img[:, :, :3]
+    return acc.astype(np.float32)
 
 
 def _camera_sample(mi, sensor, integrator, scene, sampler, x, y, W, H, spp, s, k, square, lens_on):
@@ -590,6 +624,7 @@ def read_exr(path: str) -> np.ndarray:
 
 
 def timed_render(mi, scene_dir: str, seed: int, passes: int | None = None):
+    """Load the export in `scene_dir` and render it once; returns (image, seconds, config)."""
     cfg = config(scene_dir)
     scene = load(mi, scene_dir)
     t0 = time.perf_counter()

@@ -275,7 +275,7 @@ impl Checker<'_> {
         self.number("params.bloom.threshold", p.bloom.threshold, -MAX_COLOR, MAX_COLOR)?;
         self.number("params.bloom.kernel_size", p.bloom.kernel_size, 1.0, limits::MAX_BLOOM_KERNEL)?;
         self.number("params.bloom.scale", p.bloom.scale, -MAX_COLOR, MAX_COLOR)?;
-        if let SpawnOffset::Fixed { epsilon } = p.ray_offset {
+        if let SpawnOffset::Fixed { epsilon } | SpawnOffset::ScaledNormal { epsilon } = p.ray_offset {
             self.number("params.ray_offset.epsilon", epsilon, 0.0, MAX_COORDINATE)?;
         }
         Ok(())

@@ -2,5 +2,6 @@
 //! renderers see the same float32 triangles, textures, lights and camera.
 
 pub mod mitsuba;
+pub mod native;
 
-pub use mitsuba::{ExportReport, export_mitsuba};
+pub use mitsuba::{ExportReport, Oracle, OracleChoice, export_mitsuba};
