@@ -25,11 +25,14 @@ mod common;
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use common::checks::{Exact, FDR, MIN_AGREEING, exact_check, numerically_black, summary, welch_summary};
+use common::checks::{
+    Exact, FDR, MIN_AGREEING, exact_check, exact_check_with, numerically_black, summary, welch_summary,
+};
 use common::references::{Reference, load, manifest, no_tweak, plain, reference, render_with, stale};
 use glam::Vec3;
 use rtdiff::accel::Tracer;
 use rtdiff::film::Image;
+use rtdiff::geometry::offset::{MITSUBA_RAY_EPSILON, SpawnOffset};
 use rtdiff::geometry::{Hit, Ray};
 use rtdiff::scene::file::LightSpec;
 use rtdiff::scene::{Scene, SceneFile};
@@ -53,14 +56,37 @@ fn noisy_check(
     tweak: &dyn Fn(&mut SceneFile),
     wrap: &dyn Fn(Box<dyn Tracer>) -> Box<dyn Tracer>,
 ) -> WelchReport {
+    noisy_check_with(r, &|seed| load(r, seed, tweak), wrap)
+}
+
+/// [`noisy_check`] of the loaded scene changed by `edit`.
+fn noisy_check_edited(r: &Reference, edit: &dyn Fn(&mut Scene)) -> WelchReport {
+    let scene = |seed| {
+        let mut s = load(r, seed, &no_tweak);
+        edit(&mut s);
+        s
+    };
+    noisy_check_with(r, &scene, &plain)
+}
+
+fn noisy_check_with(
+    r: &Reference,
+    scene: &dyn Fn(u64) -> Scene,
+    wrap: &dyn Fn(Box<dyn Tracer>) -> Box<dyn Tracer>,
+) -> WelchReport {
     let mean = Image::read_exr(&r.image).unwrap();
     let var = Image::read_exr(r.variance.as_ref().unwrap()).unwrap();
     let reference = Moments::from_mean_variance(&mean, &var, r.seeds).unwrap();
-    let imgs: Vec<Image> = (0..TEST_SEEDS).map(|k| render_with(&load(r, 1000 + k as u64, tweak), wrap)).collect();
+    let imgs: Vec<Image> = (0..TEST_SEEDS).map(|k| render_with(&scene(1000 + k as u64), wrap)).collect();
     let mut test = Moments::from_images(&imgs).unwrap();
     let mut reference = reference;
     numerically_black(&mut reference, &mut test);
     welch_test(&reference, &test, &WelchOptions { fdr: FDR, ..Default::default() }).unwrap()
+}
+
+/// Mitsuba 3's own spawn rule (`spawn_ray`) in place of rtdiff's.
+fn mitsuba_spawn(f: &mut SceneFile) {
+    f.params.ray_offset = SpawnOffset::ScaledNormal { epsilon: MITSUBA_RAY_EPSILON };
 }
 
 #[test]
@@ -77,7 +103,10 @@ fn every_referenced_scene_agrees_with_mitsuba() {
         if r.deterministic {
             let scene = load(r, 0, &no_tweak);
             let img = render_with(&scene, &plain);
-            let e = exact_check(&scene, &Image::read_exr(&r.image).unwrap(), &img);
+            // Mitsuba's own integrators start rays by their own rule: rtdiff's render with it
+            // tells which pixels differ only by that.
+            let offset = r.native.then(|| render_with(&load(r, 0, &mitsuba_spawn), &plain));
+            let e = exact_check_with(&scene, &Image::read_exr(&r.image).unwrap(), &img, offset.as_ref());
             println!("{:<42} exact  {} [{:.2} s]", r.name(), summary(&e), t0.elapsed().as_secs_f64());
             for b in e.bad.iter().take(12) {
                 println!("    pixel ({}, {}) rel {:.2e} {:?}", b.0, b.1, b.2, b.3);
@@ -119,7 +148,10 @@ fn exact_fails(name: &str, tweak: &dyn Fn(&mut SceneFile), edit: &dyn Fn(&mut Sc
 
 #[test]
 fn light_intensity_one_percent_high_fails_the_exact_check() {
-    for name in ["cornell_box.phong", "spheres.physical", "monkey.phong"] {
+    // Against the plugin's references and against Mitsuba's own point emitters and BSDFs.
+    for name in
+        ["cornell_box.phong", "spheres.physical", "monkey.phong", "spheres.physical.native", "teapot.physical.native"]
+    {
         exact_fails(name, &|f| scale_lights(f, 1.01), &|_| {});
     }
 }
@@ -139,15 +171,27 @@ fn texture_v_flipped_fails_the_exact_check() {
     });
 }
 
+fn mirror_weight_one_percent_high(s: &mut Scene) {
+    for m in &mut s.materials {
+        if m.is_reflective() {
+            m.ks *= 1.01;
+        }
+    }
+}
+
 #[test]
 fn mirror_weight_one_percent_high_fails_the_exact_check() {
-    exact_fails("cornell_box.physical", &no_tweak, &|s| {
-        for m in &mut s.materials {
-            if m.is_reflective() {
-                m.ks *= 1.01;
-            }
-        }
-    });
+    exact_fails("cornell_box.physical", &no_tweak, &mirror_weight_one_percent_high);
+}
+
+/// The same against Mitsuba's own `blendbsdf` (diffuse + smooth `conductor`) and `path`
+/// integrator (one bounce, 4 L(1/2) - L(1)): the Welch check must fail.
+#[test]
+fn mirror_weight_one_percent_high_fails_against_the_native_reference() {
+    let r = reference("cornell_box.physical.native");
+    let w = noisy_check_edited(&r, &mirror_weight_one_percent_high);
+    println!("cornell_box.physical.native, Ks x1.01: {}", welch_summary(&w));
+    assert!(!w.passed && w.global_rejected, "a 1% stronger mirror passed: {}", welch_summary(&w));
 }
 
 #[test]
@@ -186,7 +230,8 @@ fn leaky(t: Box<dyn Tracer>) -> Box<dyn Tracer> {
 
 #[test]
 fn noisy_check_catches_one_percent_light_bias() {
-    for name in ["cornell_box_parallelogram_light.physical", "cube.phong"] {
+    // The plugin's parallelogram and segment lights, and Mitsuba's own area emitter.
+    for name in ["cornell_box_parallelogram_light.physical", "cube.phong", "cornell_box_area_light.physical.native"] {
         let r = reference(name);
         let w = noisy_check(&r, &|f| scale_lights(f, 1.01), &plain);
         println!("{name} light x1.01: {}", welch_summary(&w));
