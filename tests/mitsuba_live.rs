@@ -10,13 +10,14 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use common::checks::{FDR, exact_check, numerically_black, summary, welch_summary};
-use common::references::{load, no_tweak, reference};
+use common::checks::{FDR, exact_check, exact_check_with, numerically_black, summary, welch_summary};
+use common::references::{load, no_tweak, plain, reference, render_with};
 use common::{root, run};
 
 use glam::Vec3;
 use rtdiff::backends;
 use rtdiff::film::Image;
+use rtdiff::geometry::offset::{MITSUBA_RAY_EPSILON, SpawnOffset};
 use rtdiff::render::{RenderOptions, render};
 use rtdiff::scene::{Overrides, Scene};
 use rtdiff::verify::image::stats::{Moments, WelchOptions, variance_test, welch_test};
@@ -214,6 +215,86 @@ fn export_says_which_oracle_it_wrote_and_why() {
     let forced = export("teapot", &["--oracle", "plugin"]);
     assert!(String::from_utf8_lossy(&forced.stdout).contains("oracle: plugin rtdiff_whitted, because: asked for"));
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The `rtdiff_whitted` plugin against Mitsuba's own emitters, BSDFs and integrators: each
+/// native reference's scene exported with `--oracle plugin` at the same settings, rendered by the
+/// plugin and checked against the native reference with the checks rtdiff faces (exact check
+/// with its classifier for deterministic scenes, Welch + BH for noisy ones). Mitsuba's spawn
+/// offset and its `twosided` convention make some pixels differ; they are classified exactly
+/// (`SpawnOffset`: rtdiff with Mitsuba's spawn rule reproduces the native pixel; `ShadingSide`)
+/// and counted. `PLUGIN_VS_NATIVE` lists the scenes the test command runs;
+/// `RTDIFF_PLUGIN_VS_NATIVE=all` adds depth_of_field (64 plugin passes per seed, about two
+/// minutes), whose figures docs/oracles.md records.
+#[test]
+fn plugin_agrees_with_mitsubas_own_plugins() {
+    let Some(py) = python() else { return };
+    let mut names: Vec<&str> = PLUGIN_VS_NATIVE.to_vec();
+    if std::env::var("RTDIFF_PLUGIN_VS_NATIVE").is_ok_and(|v| v == "all") {
+        names.push("depth_of_field");
+    }
+    let mut failures = Vec::new();
+    for name in names {
+        let r = reference(&format!("{name}.physical.native"));
+        let dir = common::temp_dir(&format!("live-plugin-{name}"));
+        let (w, h) = (r.width.to_string(), r.height.to_string());
+        let mut export = Command::new(env!("CARGO_BIN_EXE_rtdiff"));
+        export.arg("export").arg(&r.scene).args(["--to", "mitsuba", "--oracle", "plugin", "--model", "physical"]);
+        export.args(["--width", &w, "--height", &h, "--quiet", "-o"]).arg(dir.join("x"));
+        for (f, on) in &r.features {
+            export.args(["--feature", &format!("{f}={}", if *on { "on" } else { "off" })]);
+        }
+        if let Some(spp) = r.spp {
+            export.args(["--spp", &spp.to_string()]);
+        }
+        if let Some(d) = r.max_depth {
+            export.args(["--max-depth", &d.to_string()]);
+        }
+        run(&mut export);
+        let mut render = Command::new(&py);
+        render.arg(root().join("scripts/mitsuba/render.py")).arg(dir.join("x")).arg("-o").arg(dir.join("plugin.exr"));
+        if !r.deterministic {
+            render.args(["--seeds", &PLUGIN_SEEDS.to_string(), "--variance"]).arg(dir.join("plugin.var.exr"));
+        }
+        let t0 = std::time::Instant::now();
+        run(&mut render);
+        let secs = t0.elapsed().as_secs_f64();
+        let native = Image::read_exr(&r.image).unwrap();
+        let plugin = Image::read_exr(&dir.join("plugin.exr")).unwrap();
+        if r.deterministic {
+            let scene = load(&r, 0, &no_tweak);
+            let offset = render_with(&load(&r, 0, &mitsuba_spawn), &plain);
+            let x = exact_check_with(&scene, &native, &plugin, Some(&offset));
+            println!("{name}: plugin against native, exact check {} [{secs:.1} s]", summary(&x));
+            if !x.passed() {
+                failures.push(format!("{name}: {}", summary(&x)));
+            }
+        } else {
+            let var = Image::read_exr(r.variance.as_ref().unwrap()).unwrap();
+            let mut a = Moments::from_mean_variance(&native, &var, r.seeds).unwrap();
+            let pv = Image::read_exr(&dir.join("plugin.var.exr")).unwrap();
+            let mut b = Moments::from_mean_variance(&plugin, &pv, PLUGIN_SEEDS).unwrap();
+            numerically_black(&mut a, &mut b);
+            let wr = welch_test(&a, &b, &WelchOptions { fdr: FDR, ..Default::default() }).unwrap();
+            println!("{name}: plugin ({PLUGIN_SEEDS} seeds) against native, {} [{secs:.1} s]", welch_summary(&wr));
+            if !wr.passed {
+                failures.push(format!("{name}: {}", welch_summary(&wr)));
+            }
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    assert!(failures.is_empty(), "the plugin disagrees with Mitsuba's own plugins:\n{}", failures.join("\n"));
+}
+
+/// Scenes whose plugin render the test command checks against the native reference.
+const PLUGIN_VS_NATIVE: [&str; 7] =
+    ["cornell_box", "dragon", "monkey", "teapot", "spheres", "cube_textured", "cornell_box_area_light"];
+/// Plugin seeds of a noisy comparison (the native reference has 64).
+const PLUGIN_SEEDS: u32 = 32;
+
+/// Mitsuba 3's own spawn rule (`spawn_ray`) in place of rtdiff's.
+fn mitsuba_spawn(f: &mut rtdiff::scene::SceneFile) {
+    f.params.ray_offset = SpawnOffset::ScaledNormal { epsilon: MITSUBA_RAY_EPSILON };
 }
 
 #[test]

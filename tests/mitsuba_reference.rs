@@ -185,13 +185,15 @@ fn mirror_weight_one_percent_high_fails_the_exact_check() {
 }
 
 /// The same against Mitsuba's own `blendbsdf` (diffuse + smooth `conductor`) and `path`
-/// integrator (one bounce, 4 L(1/2) - L(1)): the Welch check must fail.
+/// integrator (one bounce, 4 L(1/2) - L(1)): the Welch check must fail. The mirror's pixels
+/// reject one by one (the image-wide z is dominated by the pixels beside the point light, whose
+/// variance is 10^5 times the mirror's).
 #[test]
 fn mirror_weight_one_percent_high_fails_against_the_native_reference() {
     let r = reference("cornell_box.physical.native");
     let w = noisy_check_edited(&r, &mirror_weight_one_percent_high);
     println!("cornell_box.physical.native, Ks x1.01: {}", welch_summary(&w));
-    assert!(!w.passed && w.global_rejected, "a 1% stronger mirror passed: {}", welch_summary(&w));
+    assert!(!w.passed && w.rejected_pixels > 100, "a 1% stronger mirror passed: {}", welch_summary(&w));
 }
 
 #[test]

@@ -41,6 +41,13 @@ WIDTH = HEIGHT = 128
 # tests/mitsuba_reference.rs for why 64: with K = 16 and 8 the per-pixel t-tests' far tails, where
 # Benjamini-Hochberg decides, rest on variances estimated from a handful of seeds).
 SEEDS = 64
+# Samples per pixel and seed of a noisy native reference, at least: Mitsuba's own render loop
+# integrates over the pixel, and where a sub-pixel feature covers ~1.5% of a pixel (a shadow's
+# edge beside the Cornell box's mirror) 64 seeds of 4 samples see it ~4 times and sometimes not at
+# all (measured: 0 of 256 samples for seeds 0-63 at one pixel, whose variance estimate was then
+# 6x too small and failed Welch's test against rtdiff and the plugin alike); 16 samples per seed
+# see it ~15 times. More samples do not change the expected value.
+NATIVE_MIN_SPP = 16
 MODELS = ("phong", "physical")
 # Scenes without an image oracle, and why (docs/oracles.md repeats this).
 NO_ORACLE = {}
@@ -188,10 +195,12 @@ def make_one(mi, a, job):
         cfg = job.export(a, tmp)
         scene = rm.load(mi, tmp)
         k = 1 if cfg["deterministic"] else SEEDS
+        native = cfg["oracle"] == "native"
+        spp = max(cfg["recipe"]["spp"], NATIVE_MIN_SPP) if native and k > 1 else None
         imgs, secs = [], []
         for seed in range(k):
             t0 = time.perf_counter()
-            imgs.append(rm.render(mi, scene, cfg, seed).astype(np.float64))
+            imgs.append(rm.render(mi, scene, cfg, seed, spp).astype(np.float64))
             secs.append(time.perf_counter() - t0)
     stack = np.stack(imgs)
     base = job.base()
@@ -206,7 +215,7 @@ def make_one(mi, a, job):
         "scene_sha256": sha256(scene_path),
         "model": job.model,
         "deterministic": cfg["deterministic"],
-        "mitsuba_spp": cfg["recipe"]["spp"] if cfg["oracle"] == "native" else cfg["mitsuba_spp"],
+        "mitsuba_spp": (spp or cfg["recipe"]["spp"]) if native else cfg["mitsuba_spp"],
         "light_samples": cfg["light_samples"] if cfg["plan"]["area_lights"] else None,
         "seeds": list(range(k)),
         "render_seconds": round(sum(secs), 3),

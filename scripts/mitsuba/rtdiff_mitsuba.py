@@ -567,8 +567,11 @@ def render_native(mi, scenes: dict, cfg: dict, seed: int, spp: int | None = None
     weights = dict((b, w) for b, w in recipe["terms"])
     spp = spp or int(recipe["spp"])
     acc = np.zeros((int(cfg["height"]), int(cfg["width"]), 3), dtype=np.float64)
+    # Hashed, as the plugin's seeds are: Mitsuba seeds each lane's PCG32 with only a 4-round TEA of
+    # (seed, lane), so consecutive seeds are kept well apart.
+    mixed = _seed32(seed, 0)
     for (_, b), scene in scenes.items():
-        img = np.array(mi.render(scene, seed=seed, spp=spp), dtype=np.float64)
+        img = np.array(mi.render(scene, seed=mixed, spp=spp), dtype=np.float64)
         acc += weights[b] * img[:, :, :3]
     return acc.astype(np.float32)
 

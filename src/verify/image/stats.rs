@@ -12,11 +12,6 @@
 //!   over many pixels, which no single pixel can show at realistic noise:
 //!   z = sum(m_t - m_r) / sqrt(sum(v_r/K_r + v_t/K_t)), normal two-sided p
 //!   (pixels are independent, and the sum of many of them is normal);
-//! - three **image-wide Stouffer tests** (one per channel): S = sum(z_i) / sqrt(n) over the
-//!   noisy pixel-channels, z_i = Phi^-1(F_t(t_i)) the per-pixel t mapped to a standard normal,
-//!   normal two-sided p. Every noisy pixel weighs the same, so a relative bias over many quiet
-//!   pixels shows even where a few very noisy pixels (beside a point light) dominate the summed
-//!   difference of the z test above;
 //! - **Benjamini-Hochberg** over that whole family at false-discovery rate q.
 //!   Under the complete null (the renderers agree) BH's FDR equals its
 //!   family-wise error rate, so q is also the false-alarm rate of the whole check.
@@ -153,7 +148,7 @@ pub struct WelchReport {
     pub test_count: u32,
     /// The false-discovery rate q.
     pub fdr: f64,
-    /// Hypotheses in the BH family (noisy pixel-channels + 6 image-wide).
+    /// Hypotheses in the BH family (noisy pixel-channels + 3 image-wide).
     pub tests: u64,
     /// Hypotheses BH rejected.
     pub rejected: u64,
@@ -169,11 +164,7 @@ pub struct WelchReport {
     pub global_z: [f64; 3],
     /// Image-wide two-sided p per channel.
     pub global_p: [f64; 3],
-    /// Image-wide Stouffer z per channel (mean per-pixel z times sqrt(n)).
-    pub stouffer_z: [f64; 3],
-    /// Two-sided p of `stouffer_z`.
-    pub stouffer_p: [f64; 3],
-    /// Whether BH rejected an image-wide test (z or Stouffer).
+    /// Whether BH rejected an image-wide test.
     pub global_rejected: bool,
     /// Pixels with zero variance on both sides.
     pub exact_pixels: u64,
@@ -207,22 +198,6 @@ pub fn welch_p(m1: f64, v1: f64, n1: u32, m2: f64, v2: f64, n2: u32) -> f64 {
         Ok(dist) => (2.0 * dist.sf(t.abs())).min(1.0),
         Err(_) => f64::NAN,
     }
-}
-
-/// The Welch t of two means mapped to a standard normal: `Phi^-1(F_t(t))` with the
-/// Welch-Satterthwaite degrees of freedom (signed; `None` where both variances are zero).
-pub fn welch_z(m1: f64, v1: f64, n1: u32, m2: f64, v2: f64, n2: u32) -> Option<f64> {
-    let (a, b) = (v1 / n1 as f64, v2 / n2 as f64);
-    let se2 = a + b;
-    if se2 <= 0.0 {
-        return None;
-    }
-    let t = (m2 - m1) / se2.sqrt();
-    let df = se2 * se2 / (a * a / (n1 as f64 - 1.0) + b * b / (n2 as f64 - 1.0));
-    let (dist, normal) = (StudentsT::new(0.0, 1.0, df).ok()?, Normal::new(0.0, 1.0).ok()?);
-    // The tail on t's side, so that a large |t| keeps its precision.
-    let tail = dist.sf(t.abs()).max(f64::MIN_POSITIVE);
-    Some(-normal.inverse_cdf(tail) * t.signum())
 }
 
 /// Benjamini-Hochberg at rate `q`: the p-value cut-off (every p <= it is
@@ -281,23 +256,8 @@ pub fn welch_test(reference: &Moments, test: &Moments, opts: &WelchOptions) -> R
     let global_z: [f64; 3] = std::array::from_fn(|c| if sum_se2[c] > 0.0 { sum_d[c] / sum_se2[c].sqrt() } else { 0.0 });
     let global_p: [f64; 3] =
         std::array::from_fn(|c| if sum_se2[c] > 0.0 { (2.0 * normal.sf(global_z[c].abs())).min(1.0) } else { 1.0 });
-    let (mut sum_z, mut count_z) = ([0f64; 3], [0u64; 3]);
-    for i in 0..n {
-        let (mr, vr, mt, vt) = (reference.mean[i], reference.variance[i], test.mean[i], test.variance[i]);
-        for c in 0..3 {
-            if let Some(z) = welch_z(mr[c], vr[c], kr, mt[c], vt[c], kt) {
-                sum_z[c] += z;
-                count_z[c] += 1;
-            }
-        }
-    }
-    let stouffer_z: [f64; 3] =
-        std::array::from_fn(|c| if count_z[c] > 0 { sum_z[c] / (count_z[c] as f64).sqrt() } else { 0.0 });
-    let stouffer_p: [f64; 3] =
-        std::array::from_fn(|c| if count_z[c] > 0 { (2.0 * normal.sf(stouffer_z[c].abs())).min(1.0) } else { 1.0 });
     let mut family: Vec<f64> = p.iter().flatten().copied().filter(|v| !v.is_nan()).collect();
     family.extend_from_slice(&global_p);
-    family.extend_from_slice(&stouffer_p);
     let cutoff = benjamini_hochberg(&family, opts.fdr);
     let rejects = |v: f64| cutoff.is_some_and(|cut| v <= cut);
     let rejected = family.iter().filter(|v| rejects(**v)).count() as u64;
@@ -316,7 +276,7 @@ pub fn welch_test(reference: &Moments, test: &Moments, opts: &WelchOptions) -> R
     let variance = sum_vt / samples;
     let exact_mismatches = exact_bad.iter().filter(|b| **b).count() as u64;
     let rejected_pixels = rejected_map.iter().filter(|b| **b).count() as u64;
-    let global_rejected = global_p.iter().chain(&stouffer_p).any(|v| rejects(*v));
+    let global_rejected = global_p.iter().any(|v| rejects(*v));
     Ok(WelchReport {
         reference_count: kr,
         test_count: kt,
@@ -329,8 +289,6 @@ pub fn welch_test(reference: &Moments, test: &Moments, opts: &WelchOptions) -> R
         min_p_pixel: [min_i as u32 % reference.width, min_i as u32 / reference.width],
         global_z,
         global_p,
-        stouffer_z,
-        stouffer_p,
         global_rejected,
         exact_pixels,
         exact_mismatches,
