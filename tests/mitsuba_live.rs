@@ -316,8 +316,9 @@ fn export_bad_input_is_a_clear_error() {
 }
 
 /// reference/ is what the current plugin and exporter make: regenerate a deterministic
-/// reference (monkey: interpolated normals, Ks 0.5 mirrors, the spawn rule) and a noisy one
-/// (cube: segment light, 64 seeds, mean and variance) with scripts/mitsuba/make_references.py
+/// reference (monkey: interpolated normals, Ks 0.5 mirrors, the spawn rule; and its native
+/// reference, Mitsuba's own point emitters, two lights summed) and a noisy one (cube: segment
+/// light, 64 seeds, mean and variance) with scripts/mitsuba/make_references.py
 /// and judge them against the stored images by what may differ between CPUs (docs/oracles.md,
 /// "Regenerating reference/ on another CPU"): the same seeds give the same random numbers
 /// (Mitsuba's PCG32 is integer arithmetic), but LLVM picks the host's vector width and FMA and
@@ -367,12 +368,13 @@ fn references_regenerate_from_the_current_plugin() {
         if !same_variant && !deterministic {
             continue;
         }
-        let name = format!("{}.{}", e["name"].as_str().unwrap(), e["model"].as_str().unwrap());
+        let native = if e["oracle"] == "native" { ".native" } else { "" };
+        let name = format!("{}.{}{native}", e["name"].as_str().unwrap(), e["model"].as_str().unwrap());
         let s = stored["references"]
             .as_array()
             .unwrap()
             .iter()
-            .find(|s| s["name"] == e["name"] && s["model"] == e["model"])
+            .find(|s| s["name"] == e["name"] && s["model"] == e["model"] && s["oracle"] == e["oracle"])
             .expect("regenerated reference missing from reference/manifest.json");
         assert_eq!(e["traced_sha256"], s["traced_sha256"], "{name}: the exported scene changed");
         let image = |d: &Path, key: &str| Image::read_exr(&d.join(e[key].as_str().unwrap())).unwrap();
@@ -409,6 +411,6 @@ fn references_regenerate_from_the_current_plugin() {
         checked += 1;
     }
     assert!(failures.is_empty(), "regenerated references differ from reference/:\n{}", failures.join("\n"));
-    assert_eq!(checked, if same_variant { 4 } else { 2 }, "monkey and cube, both models");
+    assert_eq!(checked, if same_variant { 5 } else { 3 }, "monkey and cube in both models, monkey native");
     let _ = std::fs::remove_dir_all(&dir);
 }
