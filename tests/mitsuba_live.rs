@@ -287,8 +287,17 @@ fn plugin_agrees_with_mitsubas_own_plugins() {
 }
 
 /// Scenes whose plugin render the test command checks against the native reference.
-const PLUGIN_VS_NATIVE: [&str; 7] =
-    ["cornell_box", "dragon", "monkey", "teapot", "spheres", "cube_textured", "cornell_box_area_light"];
+const PLUGIN_VS_NATIVE: [&str; 9] = [
+    "cornell_box",
+    "dragon",
+    "monkey",
+    "teapot",
+    "spheres",
+    "cube_textured",
+    "cornell_box_area_light",
+    "texture_wrap",
+    "texture_wrap_bilinear",
+];
 /// Plugin seeds of a noisy comparison (the native reference has 64).
 const PLUGIN_SEEDS: u32 = 32;
 

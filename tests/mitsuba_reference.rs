@@ -196,6 +196,47 @@ fn mirror_weight_one_percent_high_fails_against_the_native_reference() {
     assert!(!w.passed && w.rejected_pixels > 100, "a 1% stronger mirror passed: {}", welch_summary(&w));
 }
 
+/// Texture wrap modes (repeat, mirror, clamp) against Mitsuba's own `bitmap` `wrap_mode`, with
+/// nearest and bilinear lookups: scenes/texture_wrap.json frames each rectangle (uvs -1 to 2 and
+/// -0.5 to 1.5) so that no pixel centre lies on a texel edge or a triangle edge, and every pixel
+/// must agree (not 99.9%).
+#[test]
+fn wrap_modes_agree_with_mitsubas_bitmap_on_every_pixel() {
+    for name in ["texture_wrap.physical.native", "texture_wrap_bilinear.physical.native", "texture_wrap.phong"] {
+        let r = reference(name);
+        let scene = load(&r, 0, &no_tweak);
+        let e = exact_check(&scene, &Image::read_exr(&r.image).unwrap(), &render_with(&scene, &plain));
+        println!("{name}: {}", summary(&e));
+        assert!(e.bad.is_empty(), "{name}: {}", summary(&e));
+    }
+}
+
+/// One wrap mode swapped (repeat and mirror exchanged, or clamp read as repeat) must fail against
+/// Mitsuba's `bitmap`, nearest and bilinear.
+#[test]
+fn wrap_mode_swapped_fails_the_exact_check() {
+    use rtdiff::texture::WrapMode;
+    let swap = |f: &mut SceneFile| {
+        for m in f.materials.values_mut() {
+            m.texture_wrap = match m.texture_wrap {
+                Some(WrapMode::Repeat) => Some(WrapMode::Mirror),
+                Some(WrapMode::Mirror) => Some(WrapMode::Repeat),
+                w => w,
+            };
+        }
+    };
+    let clamp_as_repeat = |f: &mut SceneFile| {
+        for m in f.materials.values_mut().filter(|m| m.texture_wrap == Some(WrapMode::Clamp)) {
+            m.texture_wrap = Some(WrapMode::Repeat);
+        }
+    };
+    for name in ["texture_wrap.physical.native", "texture_wrap_bilinear.physical.native"] {
+        let a = exact_fails(name, &swap, &|_| {});
+        let b = exact_fails(name, &clamp_as_repeat, &|_| {});
+        assert!(a.agreeing < 0.9 && b.agreeing < 0.9, "{name}: {} / {}", summary(&a), summary(&b));
+    }
+}
+
 #[test]
 fn camera_half_a_pixel_off_fails_the_exact_check() {
     exact_fails("teapot.phong", &no_tweak, &|s| {

@@ -72,7 +72,12 @@ NATIVE = {
     "cornell_box": {"max_depth": 1, "spp": 4},
     "cornell_box_area_light": {},
     "depth_of_field": {"spp": 4},
+    "texture_wrap": {},
+    "texture_wrap_bilinear": {"scene": "texture_wrap", "features": ["bilinear_filtering=on"]},
 }
+# Scenes whose image size is part of the test (texture_wrap frames each rectangle as 96 x 64 pixels,
+# 4 pixels per texel, so that no pixel centre lies on a texel edge).
+SIZES = {"texture_wrap": (288, 64)}
 
 
 def sha256(path):
@@ -101,7 +106,8 @@ def main():
     scenes = sorted(f[:-5] for f in os.listdir(os.path.join(ROOT, "scenes")) if f.endswith(".json"))
     jobs = [Job(name, FEATURES.get(name, []), model, "plugin") for name in scenes if name not in NO_ORACLE
             for model in MODELS]
-    jobs += [Job(name, opts.get("features", []), "physical", "native", opts.get("spp"), opts.get("max_depth"))
+    jobs += [Job(name, opts.get("features", []), "physical", "native", opts.get("spp"), opts.get("max_depth"),
+                 opts.get("scene", name))
              for name, opts in NATIVE.items()]
     entries = []
     for job in jobs:
@@ -135,18 +141,20 @@ class Job:
     """One reference: scene `name` in `model` through `oracle` ("plugin" or "native"), with
     feature switches and, where given, rtdiff's camera samples and recursion depth."""
 
-    def __init__(self, name, features, model, oracle, spp=None, max_depth=None):
+    def __init__(self, name, features, model, oracle, spp=None, max_depth=None, scene=None):
         self.name, self.features, self.model, self.oracle = name, features, model, oracle
         self.spp, self.max_depth = spp, max_depth
+        self.scene = scene or name
+        self.width, self.height = SIZES.get(self.scene, (WIDTH, HEIGHT))
 
     def base(self):
         return f"{self.name}.{self.model}" + (".native" if self.oracle == "native" else "")
 
     def export(self, a, out_dir):
         """Run rtdiff export for this job into out_dir; returns its rtdiff.json."""
-        cmd = [a.rtdiff, "export", os.path.join(ROOT, "scenes", f"{self.name}.json"), "--to", "mitsuba", "-o",
-               out_dir, "--model", self.model, "--oracle", self.oracle, "--width", str(WIDTH), "--height",
-               str(HEIGHT), "--quiet"]
+        cmd = [a.rtdiff, "export", os.path.join(ROOT, "scenes", f"{self.scene}.json"), "--to", "mitsuba", "-o",
+               out_dir, "--model", self.model, "--oracle", self.oracle, "--width", str(self.width), "--height",
+               str(self.height), "--quiet"]
         for f in self.features:
             cmd += ["--feature", f]
         if self.spp is not None:
@@ -182,6 +190,7 @@ def refresh(a, job, entry):
     new = dict(entry)
     new.update(describe(job, cfg))
     new["spp"], new["max_depth"] = job.spp, job.max_depth
+    new["width"], new["height"] = job.width, job.height
     if new["traced_sha256"] != entry["traced_sha256"]:
         print(f"{job.base()}: traced_sha256 {entry['traced_sha256'][:12]} -> {new['traced_sha256'][:12]}",
               file=sys.stderr)
@@ -189,7 +198,7 @@ def refresh(a, job, entry):
 
 
 def make_one(mi, a, job):
-    scene_rel = f"scenes/{job.name}.json"
+    scene_rel = f"scenes/{job.scene}.json"
     scene_path = os.path.join(ROOT, scene_rel)
     with tempfile.TemporaryDirectory(prefix="rtdiff-ref-") as tmp:
         cfg = job.export(a, tmp)
@@ -212,6 +221,8 @@ def make_one(mi, a, job):
         "features": job.features,
         "spp": job.spp,
         "max_depth": job.max_depth,
+        "width": job.width,
+        "height": job.height,
         "scene_sha256": sha256(scene_path),
         "model": job.model,
         "deterministic": cfg["deterministic"],

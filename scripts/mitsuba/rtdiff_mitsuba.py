@@ -7,7 +7,7 @@ segment light and no parallelogram light with bilinear corner colours. `rtdiff_w
 `scene.ray_intersect` / `ray_test` (Embree inside Mitsuba), takes camera rays from Mitsuba's
 sensor (`perspective` / `thinlens`), reads the hit point, geometric normal and interpolated
 shading normal from Mitsuba's surface interaction, looks up kd through Mitsuba's `diffuse` BSDF and
-`bitmap` texture (nearest / bilinear, clamped), and draws every random number from Mitsuba's
+`bitmap` texture (nearest / bilinear, the material's wrap mode), and draws every random number from Mitsuba's
 sampler. Only the reports' model is written here, from the course reports (../shared/seeds/) and
 docs/oracles.md, independently of rtdiff's Rust code:
 

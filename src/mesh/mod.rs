@@ -114,6 +114,8 @@ pub struct MtlMaterial {
     pub map_kd: Option<PathBuf>,
     /// Where `map_kd` was written, when it came from an MTL file.
     pub map_kd_source: Option<TextureSource>,
+    /// `map_Kd -clamp on`: the texture clamps outside uv [0, 1] (it repeats otherwise).
+    pub map_kd_clamp: bool,
 }
 
 /// An indexed triangle mesh. `normals` and `uvs`, when present, are indexed like `positions`.

@@ -468,6 +468,16 @@ mod tests {
     }
 
     #[test]
+    fn texture_wrap_is_one_of_three_modes() {
+        let m = message(r#"{ "materials": { "floor": { "texture_wrap": "tile" } } }"#);
+        assert!(m.contains("materials.floor.texture_wrap: unknown variant `tile`"), "{m}");
+        for w in ["repeat", "mirror", "clamp"] {
+            let f = parse(&format!(r#"{{ "materials": {{ "floor": {{ "texture_wrap": "{w}" }} }} }}"#)).unwrap();
+            assert_eq!(f.materials["floor"].texture_wrap.unwrap().name(), w);
+        }
+    }
+
+    #[test]
     fn unknown_fields_inside_ray_offset_are_refused() {
         let m = message(r#"{ "params": { "ray_offset": { "kind": "fixed", "epsilon": 1e-4, "eps": 1 } } }"#);
         assert!(m.contains("unknown field `eps`"), "{m}");

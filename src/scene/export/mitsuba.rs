@@ -35,7 +35,7 @@ use crate::scene::digest::traced_sha256;
 use crate::scene::file::LightSpec;
 use crate::scene::{Overrides, Scene, SceneFile};
 use crate::shading::ShadingModelKind;
-use crate::texture::Texture;
+use crate::texture::{Texture, WrapMode};
 
 /// Version tag of `rtdiff.json`, checked by the Python side.
 pub const FORMAT: &str = "rtdiff-mitsuba-1";
@@ -344,7 +344,7 @@ impl Shapes<'_> {
                         (Some(t), true) => Some(self.texture(t, 1.0, report)?),
                         _ => None,
                     };
-                    write_bsdf(xml, m.kd, texture.as_deref(), self.plan.bilinear);
+                    write_bsdf(xml, m.kd, texture.as_deref(), self.plan.bilinear, m.wrap);
                 }
             }
             let _ = writeln!(xml, "    </shape>");
@@ -366,7 +366,9 @@ impl Shapes<'_> {
                     let bsdf = self.native_bsdf(material, false);
                     let _ = writeln!(xml, "        <ref id=\"{bsdf}\"/>");
                 }
-                Oracle::Plugin => write_bsdf(xml, self.scene.materials[material as usize].kd, None, false),
+                Oracle::Plugin => {
+                    write_bsdf(xml, self.scene.materials[material as usize].kd, None, false, WrapMode::Repeat)
+                }
             }
             let _ = writeln!(xml, "    </shape>");
             // The centre (and radius) give the sphere's hit-point error bound to the plugin's spawn rule.
@@ -432,7 +434,7 @@ impl Shapes<'_> {
                             report.files.push(path);
                             half
                         };
-                        bitmap_element(&name, self.plan.bilinear, "            ")
+                        bitmap_element(&name, self.plan.bilinear, m.wrap, "            ")
                     }
                     _ => {
                         let kd = if factor == 1.0 { m.kd } else { (m.kd * kind.diffuse_factor()).min(Vec3::ONE) * s };
@@ -450,13 +452,14 @@ impl Shapes<'_> {
 }
 
 /// A `bitmap` texture element named "reflectance" for the texture file `name`.
-fn bitmap_element(name: &str, bilinear: bool, indent: &str) -> String {
+fn bitmap_element(name: &str, bilinear: bool, wrap: WrapMode, indent: &str) -> String {
     let filter = if bilinear { "bilinear" } else { "nearest" };
+    let wrap = wrap.name();
     format!(
         "{indent}<texture type=\"bitmap\" name=\"reflectance\">\n\
          {indent}    <string name=\"filename\" value=\"{name}\"/>\n\
          {indent}    <string name=\"filter_type\" value=\"{filter}\"/>\n\
-         {indent}    <string name=\"wrap_mode\" value=\"clamp\"/>\n\
+         {indent}    <string name=\"wrap_mode\" value=\"{wrap}\"/>\n\
          {indent}    <boolean name=\"raw\" value=\"true\"/>\n\
          {indent}</texture>\n"
     )
@@ -559,10 +562,10 @@ fn mitsuba_spp(scene: &Scene, plan: &Plan) -> u32 {
     scene.spp * if plan.depth_of_field { scene.params.dof_samples } else { 1 }
 }
 
-fn write_bsdf(xml: &mut String, kd: Vec3, texture: Option<&str>, bilinear: bool) {
+fn write_bsdf(xml: &mut String, kd: Vec3, texture: Option<&str>, bilinear: bool, wrap: WrapMode) {
     let _ = writeln!(xml, "        <bsdf type=\"diffuse\">");
     match texture {
-        Some(t) => xml.push_str(&bitmap_element(t, bilinear, "            ")),
+        Some(t) => xml.push_str(&bitmap_element(t, bilinear, wrap, "            ")),
         None => {
             let _ = writeln!(xml, "            <rgb name=\"reflectance\" value=\"{}\"/>", v3(kd));
         }
