@@ -1,6 +1,11 @@
 """Mitsuba 3 side of rtdiff's image oracle: the reports' Whitted integrator as a Mitsuba plugin,
 and a render loop over a scene exported by `rtdiff export SCENE --to mitsuba -o DIR`.
 
+An export is one of two oracles (rtdiff.json "oracle"). A native export uses only Mitsuba's own
+emitters, BSDFs and integrators; `load` and `render` then run its recipe (`render_native`: one
+`mi.render` per emitter file and BSDF file, summed with the recipe's weights). A plugin export
+uses the integrator below.
+
 Mitsuba 3 has no Phong BSDF, no Whitted integrator, no glossy lobe of the reports' kind, no
 segment light and no parallelogram light with bilinear corner colours. `rtdiff_whitted`
 (registered with `mi.register_integrator`) adds them: it intersects with Mitsuba's
