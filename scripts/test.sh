@@ -54,10 +54,15 @@ if ! command -v parallel >/dev/null 2>&1; then
 fi
 export RTDIFF_REQUIRE_PARALLEL=1
 
-say "cargo test ${features[*]:-}"
+say "cargo test --no-fail-fast ${features[*]:-}"
 log="$(mktemp)"
 trap 'rm -f "$log"' EXIT
-cargo test --locked "${features[@]}" 2>&1 | tee "$log"
-# One closing line over every test binary (cargo prints one per binary).
+# --no-fail-fast: every test binary runs even when one fails, so one run shows every failure;
+# the script still exits with cargo's status.
+status=0
+cargo test --locked --no-fail-fast "${features[@]}" 2>&1 | tee "$log" || status=$?
+# One closing line over every test binary (cargo prints one per binary), and the binaries
+# that failed (cargo names them in its closing "error: N targets failed" list).
 awk '/^test result:/ { for (i = 1; i <= NF; i++) { if ($(i) ~ /^passed;?$/) p += $(i-1); if ($(i) ~ /^failed;?$/) f += $(i-1) } }
      END { printf "rtdiff tests: %d passed, %d failed\n", p, f }' "$log"
+exit "$status"

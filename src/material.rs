@@ -5,7 +5,7 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use crate::shading::ShadingModelKind;
-use crate::texture::Texture;
+use crate::texture::{Texture, WrapMode};
 
 /// A surface material (the reports' Kd / Ks / Ns, plus opacity and a Kd texture).
 #[derive(Clone, Debug)]
@@ -22,6 +22,8 @@ pub struct Material {
     pub opacity: f32,
     /// Diffuse texture replacing `kd` when texture mapping is on.
     pub kd_texture: Option<Arc<Texture>>,
+    /// How `kd_texture` is addressed outside `[0, 1]`.
+    pub wrap: WrapMode,
     /// Shading model used at hits on this material.
     pub model: ShadingModelKind,
 }
@@ -36,6 +38,7 @@ impl Default for Material {
             shininess: 1.0,
             opacity: 1.0,
             kd_texture: None,
+            wrap: WrapMode::Repeat,
             model: ShadingModelKind::Phong,
         }
     }

@@ -10,13 +10,17 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use common::checks::{FDR, exact_check, exact_check_with, numerically_black, summary, welch_summary};
+use common::references::{load, no_tweak, plain, reference, render_with};
 use common::{root, run};
 
 use glam::Vec3;
 use rtdiff::backends;
 use rtdiff::film::Image;
+use rtdiff::geometry::offset::{MITSUBA_RAY_EPSILON, SpawnOffset};
 use rtdiff::render::{RenderOptions, render};
 use rtdiff::scene::{Overrides, Scene};
+use rtdiff::verify::image::stats::{Moments, WelchOptions, variance_test, welch_test};
 
 fn python() -> Option<PathBuf> {
     common::venv_python("mitsuba_live")
@@ -180,6 +184,194 @@ fn bloom_matches_openimageio() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// The exporter says per scene which oracle it wrote and why, on stdout and in the export
+/// (scene.xml's comment, rtdiff.json), and `--oracle native` refuses what Mitsuba cannot express.
+#[test]
+fn export_says_which_oracle_it_wrote_and_why() {
+    let dir = common::temp_dir("live-oracle");
+    let export = |scene: &str, extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_rtdiff"))
+            .arg("export")
+            .arg(root().join("scenes").join(format!("{scene}.json")))
+            .args(["--to", "mitsuba", "--width", "16", "--height", "16", "--model", "physical", "-o"])
+            .arg(dir.join(scene))
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let teapot = export("teapot", &[]);
+    let out = String::from_utf8_lossy(&teapot.stdout);
+    assert!(teapot.status.success() && out.contains("oracle: native (Mitsuba's direct"), "{out}");
+    let cfg = std::fs::read_to_string(dir.join("teapot/rtdiff.json")).unwrap();
+    assert!(cfg.contains("\"oracle\": \"native\""), "{cfg}");
+    let cube = export("cube", &[]);
+    let out = String::from_utf8_lossy(&cube.stdout);
+    assert!(out.contains("oracle: plugin rtdiff_whitted, because: light 1: segment lights"), "{out}");
+    let xml = std::fs::read_to_string(dir.join("cube/scene.xml")).unwrap();
+    assert!(xml.contains("<!-- Oracle: plugin rtdiff_whitted, because: light 1: segment lights"), "{xml}");
+    let refused = export("cube", &["--oracle", "native"]);
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success() && err.contains("segment lights have no Mitsuba emitter"), "{err}");
+    let forced = export("teapot", &["--oracle", "plugin"]);
+    assert!(String::from_utf8_lossy(&forced.stdout).contains("oracle: plugin rtdiff_whitted, because: asked for"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The `rtdiff_whitted` plugin against Mitsuba's own emitters, BSDFs and integrators: each
+/// native reference's scene exported with `--oracle plugin` at the same settings, rendered by the
+/// plugin and checked against the native reference with the checks rtdiff faces (exact check
+/// with its classifier for deterministic scenes, Welch + BH for noisy ones). Mitsuba's spawn
+/// offset and its `twosided` convention make some pixels differ; they are classified exactly
+/// (`SpawnOffset`: rtdiff with Mitsuba's spawn rule reproduces the native pixel; `ShadingSide`)
+/// and counted. `PLUGIN_VS_NATIVE` lists the scenes the test command runs;
+/// `RTDIFF_PLUGIN_VS_NATIVE=all` adds depth_of_field (64 plugin passes per seed, about two
+/// minutes), whose figures docs/oracles.md records.
+#[test]
+fn plugin_agrees_with_mitsubas_own_plugins() {
+    let Some(py) = python() else { return };
+    let mut names: Vec<&str> = PLUGIN_VS_NATIVE.to_vec();
+    if std::env::var("RTDIFF_PLUGIN_VS_NATIVE").is_ok_and(|v| v == "all") {
+        names.push("depth_of_field");
+    }
+    let mut failures = Vec::new();
+    for name in names {
+        let r = reference(&format!("{name}.physical.native"));
+        let dir = common::temp_dir(&format!("live-plugin-{name}"));
+        let (w, h) = (r.width.to_string(), r.height.to_string());
+        let mut export = Command::new(env!("CARGO_BIN_EXE_rtdiff"));
+        export.arg("export").arg(&r.scene).args(["--to", "mitsuba", "--oracle", "plugin", "--model", "physical"]);
+        export.args(["--width", &w, "--height", &h, "--quiet", "-o"]).arg(dir.join("x"));
+        for (f, on) in &r.features {
+            export.args(["--feature", &format!("{f}={}", if *on { "on" } else { "off" })]);
+        }
+        if let Some(spp) = r.spp {
+            export.args(["--spp", &spp.to_string()]);
+        }
+        if let Some(d) = r.max_depth {
+            export.args(["--max-depth", &d.to_string()]);
+        }
+        run(&mut export);
+        let mut render = Command::new(&py);
+        render.arg(root().join("scripts/mitsuba/render.py")).arg(dir.join("x")).arg("-o").arg(dir.join("plugin.exr"));
+        if !r.deterministic {
+            render.args(["--seeds", &PLUGIN_SEEDS.to_string(), "--variance"]).arg(dir.join("plugin.var.exr"));
+        }
+        let t0 = std::time::Instant::now();
+        run(&mut render);
+        let secs = t0.elapsed().as_secs_f64();
+        let native = Image::read_exr(&r.image).unwrap();
+        let plugin = Image::read_exr(&dir.join("plugin.exr")).unwrap();
+        if r.deterministic {
+            let scene = load(&r, 0, &no_tweak);
+            let offset = render_with(&load(&r, 0, &mitsuba_spawn), &plain);
+            let x = exact_check_with(&scene, &native, &plugin, Some(&offset));
+            println!("{name}: plugin against native, exact check {} [{secs:.1} s]", summary(&x));
+            if !x.passed() {
+                failures.push(format!("{name}: {}", summary(&x)));
+            }
+        } else {
+            let var = Image::read_exr(r.variance.as_ref().unwrap()).unwrap();
+            let mut a = Moments::from_mean_variance(&native, &var, r.seeds).unwrap();
+            let pv = Image::read_exr(&dir.join("plugin.var.exr")).unwrap();
+            let mut b = Moments::from_mean_variance(&plugin, &pv, PLUGIN_SEEDS).unwrap();
+            numerically_black(&mut a, &mut b);
+            let wr = welch_test(&a, &b, &WelchOptions { fdr: FDR, ..Default::default() }).unwrap();
+            println!("{name}: plugin ({PLUGIN_SEEDS} seeds) against native, {} [{secs:.1} s]", welch_summary(&wr));
+            if !wr.passed {
+                failures.push(format!("{name}: {}", welch_summary(&wr)));
+            }
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    assert!(failures.is_empty(), "the plugin disagrees with Mitsuba's own plugins:\n{}", failures.join("\n"));
+}
+
+/// Scenes whose plugin render the test command checks against the native reference.
+const PLUGIN_VS_NATIVE: [&str; 9] = [
+    "cornell_box",
+    "dragon",
+    "monkey",
+    "teapot",
+    "spheres",
+    "cube_textured",
+    "cornell_box_area_light",
+    "texture_wrap",
+    "texture_wrap_bilinear",
+];
+/// Plugin seeds of a noisy comparison (the native reference has 64).
+const PLUGIN_SEEDS: u32 = 32;
+
+/// Mitsuba 3's own spawn rule (`spawn_ray`) in place of rtdiff's.
+fn mitsuba_spawn(f: &mut rtdiff::scene::SceneFile) {
+    f.params.ray_offset = SpawnOffset::ScaledNormal { epsilon: MITSUBA_RAY_EPSILON };
+}
+
+/// A peer's test scene: Mitsuba 3's own Cornell box (`mi.cornell_box()`, BSD-3-Clause,
+/// tests/peer/mitsuba_cornell_box/ORIGIN.md), kept as XML. scripts/mitsuba/peer_scene.py checks the
+/// transcription against `mi.cornell_box()` and renders it with Mitsuba's own plugins (direct light
+/// only, emitters hidden, box filter: the three changes printed); scripts/mitsuba/import_scene.py
+/// converts it into an rtdiff scene; rtdiff's 32 seeds against Mitsuba's 64 by Welch + BH
+/// (q = 0.01), and 8 seeds with the light 1% brighter, which must fail.
+#[test]
+fn peer_scene_renders_as_mitsuba_renders_it() {
+    let Some(py) = python() else { return };
+    let dir = common::temp_dir("live-peer");
+    let xml = root().join("tests/peer/mitsuba_cornell_box/cornell_box.xml");
+    let (mean, var) = (dir.join("mitsuba.exr"), dir.join("mitsuba.var.exr"));
+    let info = run(Command::new(&py)
+        .arg(root().join("scripts/mitsuba/peer_scene.py"))
+        .arg(&xml)
+        .arg("-o")
+        .arg(&mean)
+        .arg("--variance")
+        .arg(&var)
+        .args(["--builtin", "cornell_box", "--seeds", &PEER_MITSUBA_SEEDS.to_string()]));
+    println!("Mitsuba: {}", info.trim());
+    let imported = run(Command::new(&py)
+        .arg(root().join("scripts/mitsuba/import_scene.py"))
+        .arg(&xml)
+        .arg("-o")
+        .arg(dir.join("rtdiff")));
+    println!("imported: {}", imported.trim());
+    let scene_path = dir.join("rtdiff/scene.json");
+    let reference = Moments::from_mean_variance(
+        &Image::read_exr(&mean).unwrap(),
+        &Image::read_exr(&var).unwrap(),
+        PEER_MITSUBA_SEEDS,
+    )
+    .unwrap();
+    let check = |light: f32, seeds: u32| {
+        let imgs: Vec<Image> = (0..seeds)
+            .map(|k| {
+                let mut file = Scene::read_file(&scene_path).unwrap();
+                for l in &mut file.lights {
+                    if let rtdiff::scene::file::LightSpec::Parallelogram { colors, .. } = l {
+                        colors.iter_mut().for_each(|c| *c *= light);
+                    }
+                }
+                let ov = Overrides { seed: Some(1000 + k as u64), ..Default::default() };
+                render_with(&Scene::from_file_with(file, &scene_path, &ov).unwrap(), &plain)
+            })
+            .collect();
+        let (mut a, mut b) = (reference.clone(), Moments::from_images(&imgs).unwrap());
+        numerically_black(&mut a, &mut b);
+        welch_test(&a, &b, &WelchOptions { fdr: FDR, ..Default::default() }).unwrap()
+    };
+    let w = check(1.0, PLUGIN_SEEDS);
+    println!("Mitsuba's Cornell box, rtdiff against Mitsuba: {}", welch_summary(&w));
+    assert!(w.passed, "rtdiff disagrees with Mitsuba on its own Cornell box: {}", welch_summary(&w));
+    let lit = reference.mean.iter().filter(|m| m[1] > 1e-2).count();
+    assert!(lit > 30_000, "the peer scene is nearly black ({lit} lit pixels)");
+    // 8 seeds are plenty to see 1% over the whole image (z ~ 70 measured).
+    let wrong = check(1.01, 8);
+    println!("Mitsuba's Cornell box, light x1.01: {}", welch_summary(&wrong));
+    assert!(!wrong.passed && wrong.global_rejected, "a 1% brighter light passed: {}", welch_summary(&wrong));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Mitsuba seeds of the peer scene's reference (16 samples each).
+const PEER_MITSUBA_SEEDS: u32 = 64;
+
 #[test]
 fn export_bad_input_is_a_clear_error() {
     let missing = Command::new(env!("CARGO_BIN_EXE_rtdiff"))
@@ -199,12 +391,25 @@ fn export_bad_input_is_a_clear_error() {
 }
 
 /// reference/ is what the current plugin and exporter make: regenerate a deterministic
-/// reference (monkey: interpolated normals, Ks 0.5 mirrors, the spawn rule) and a noisy one
-/// (cube: segment light, 64 seeds, mean and variance) with scripts/mitsuba/make_references.py
-/// and compare them with the stored images. Same seeds give the same random numbers
-/// (Mitsuba's PCG32 is integer arithmetic); only float rounding may differ between CPUs
-/// (LLVM picks the host's vector width and FMA), so pixels must agree to 1e-5 relative
-/// (floor 1e-3) rather than byte for byte.
+/// reference (monkey: interpolated normals, Ks 0.5 mirrors, the spawn rule; and its native
+/// reference, Mitsuba's own point emitters, two lights summed) and a noisy one (cube: segment
+/// light, 64 seeds, mean and variance) with scripts/mitsuba/make_references.py
+/// and judge them against the stored images by what may differ between CPUs (docs/oracles.md,
+/// "Regenerating reference/ on another CPU"): the same seeds give the same random numbers
+/// (Mitsuba's PCG32 is integer arithmetic), but LLVM picks the host's vector width and FMA and
+/// Embree its kernels, so float rounding differs, and in a noisy image a rounding can flip a
+/// sample (a shadow ray at an edge), which moves a 64-seed mean by far more than rounding.
+///
+/// - a deterministic image must pass the exact check that judges rtdiff against it (99.9% of
+///   pixels within 1e-3 relative, every other pixel classified): float32 rounding of the <= ~100
+///   operations behind a pixel is gamma(100) = 6e-6 relative, times at most the Phong exponent
+///   where a highlight is sampled (250 on monkey: 1.5e-3 in the worst case), which is the
+///   classifier's terminator class; measured as an AVX2 CPU: 5.2e-4 (monkey.phong);
+/// - a noisy mean is judged by Welch's test against the stored mean with both images' own
+///   variances over K = 64 seeds, Benjamini-Hochberg at q = 0.01 (the false-alarm rate for
+///   independent seeds; the same seeds only make it more conservative), pixel-channels below
+///   1e-5 on both sides compared absolutely to 1e-5 (`numerically_black`);
+/// - a variance image by the F-test of the two variances per pixel-channel, BH at q = 0.01.
 #[test]
 fn references_regenerate_from_the_current_plugin() {
     let Some(py) = python() else { return };
@@ -232,34 +437,55 @@ fn references_regenerate_from_the_current_plugin() {
         );
     }
     let mut checked = 0;
+    let mut failures = Vec::new();
     for e in fresh["references"].as_array().unwrap() {
-        if !same_variant && !e["deterministic"].as_bool().unwrap() {
+        let deterministic = e["deterministic"].as_bool().unwrap();
+        if !same_variant && !deterministic {
             continue;
         }
+        let native = if e["oracle"] == "native" { ".native" } else { "" };
+        let name = format!("{}.{}{native}", e["name"].as_str().unwrap(), e["model"].as_str().unwrap());
         let s = stored["references"]
             .as_array()
             .unwrap()
             .iter()
-            .find(|s| s["name"] == e["name"] && s["model"] == e["model"])
+            .find(|s| s["name"] == e["name"] && s["model"] == e["model"] && s["oracle"] == e["oracle"])
             .expect("regenerated reference missing from reference/manifest.json");
-        assert_eq!(e["traced_sha256"], s["traced_sha256"], "{}: the exported scene changed", e["name"]);
-        for key in ["image", "variance"] {
-            let Some(file) = e[key].as_str() else { continue };
-            let (a, b) = (
-                Image::read_exr(&dir.join(file)).unwrap(),
-                Image::read_exr(&root().join("reference").join(file)).unwrap(),
-            );
-            let worst = a
-                .pixels
-                .iter()
-                .zip(&b.pixels)
-                .map(|(p, q)| ((*p - *q).abs() / p.abs().max(q.abs()).max(Vec3::splat(1e-3))).max_element())
-                .fold(0f32, f32::max);
-            println!("{file}: regenerated, max relative difference {worst:.1e}");
-            assert!(worst <= 1e-5, "{file}: the regenerated reference differs by {worst:e} relative");
+        assert_eq!(e["traced_sha256"], s["traced_sha256"], "{name}: the exported scene changed");
+        let image = |d: &Path, key: &str| Image::read_exr(&d.join(e[key].as_str().unwrap())).unwrap();
+        let refdir = root().join("reference");
+        if deterministic {
+            let r = reference(&name);
+            let scene = load(&r, 0, &no_tweak);
+            let x = exact_check(&scene, &image(&refdir, "image"), &image(&dir, "image"));
+            println!("{name}: regenerated, exact check {}", summary(&x));
+            if !x.passed() {
+                failures.push(format!("{name}: {}", summary(&x)));
+            }
             checked += 1;
+            continue;
         }
+        let k = e["seeds"].as_array().unwrap().len() as u32;
+        let moments = |d: &Path| Moments::from_mean_variance(&image(d, "image"), &image(d, "variance"), k).unwrap();
+        let (mut a, mut b) = (moments(&refdir), moments(&dir));
+        numerically_black(&mut a, &mut b);
+        let w = welch_test(&a, &b, &WelchOptions { fdr: FDR, ..Default::default() }).unwrap();
+        let v = variance_test(&a, &b, FDR).unwrap();
+        println!(
+            "{name}: regenerated, mean {}, min p {:.2e}; variance {} of {} rejected, min p {:.2e}, largest ratio {:.6}",
+            welch_summary(&w),
+            w.min_p,
+            v.rejected,
+            v.tests,
+            v.min_p,
+            v.max_ratio
+        );
+        if !w.passed || !v.passed {
+            failures.push(format!("{name}: mean {}; variance {} rejected", welch_summary(&w), v.rejected));
+        }
+        checked += 1;
     }
-    assert_eq!(checked, if same_variant { 6 } else { 2 }, "monkey (2 images) and cube (2 means + 2 variances)");
+    assert!(failures.is_empty(), "regenerated references differ from reference/:\n{}", failures.join("\n"));
+    assert_eq!(checked, if same_variant { 5 } else { 3 }, "monkey and cube in both models, monkey native");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -5,7 +5,7 @@
 //! call, in the model and at the size the manifest names, and checked:
 //!
 //! - **deterministic** scenes (pixel centres, point lights, mirrors, textures):
-//!   at least 99.9% of pixels within 1e-3 relative (see [`REL_TOL`]); the other
+//!   at least 99.9% of pixels within 1e-3 relative (see `common::checks::REL_TOL`); the other
 //!   pixels are listed and classified (silhouette, triangle edge, shadow
 //!   terminator, shadow edge), and an unexplained one fails the test;
 //! - **noisy** scenes (area lights, glossy, depth of field, pixel jitter):
@@ -25,27 +25,19 @@ mod common;
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
+use common::checks::{
+    Exact, FDR, MIN_AGREEING, exact_check, exact_check_with, numerically_black, summary, welch_summary,
+};
 use common::references::{Reference, load, manifest, no_tweak, plain, reference, render_with, stale};
 use glam::Vec3;
 use rtdiff::accel::Tracer;
-use rtdiff::backends;
 use rtdiff::film::Image;
+use rtdiff::geometry::offset::{MITSUBA_RAY_EPSILON, SpawnOffset};
 use rtdiff::geometry::{Hit, Ray};
-use rtdiff::integrator::debug::RayNode;
 use rtdiff::scene::file::LightSpec;
 use rtdiff::scene::{Scene, SceneFile};
 use rtdiff::verify::image::stats::{Moments, WelchOptions, WelchReport, welch_test};
 
-/// Relative tolerance of deterministic pixels (the 1e-3). Both renderers
-/// trace the same float32 triangles from the same camera and sum the same terms in
-/// float32; measured agreement away from the classified pixels is ~1e-6 relative.
-const REL_TOL: f32 = 1e-3;
-/// Below this value a pixel is compared absolutely: |a - b| <= REL_TOL * FLOOR =
-/// 1e-5, 30x below the darkest non-zero 8-bit sRGB step (linear 3.0e-4), so near-black
-/// pixels do not fail on rounding of values that no display can show.
-const FLOOR: f32 = 1e-2;
-/// Fraction of pixels that must agree on deterministic scenes (the 99.9%).
-const MIN_AGREEING: f64 = 0.999;
 /// Independent rtdiff renders of a noisy scene (the reference's K, 64, is in the manifest).
 /// The per-pixel t-tests are decided by Benjamini-Hochberg in their far tail (p ~ q / 10^4),
 /// where Welch's t-distribution is only as good as the normality of the per-seed pixel values
@@ -58,214 +50,43 @@ const MIN_AGREEING: f64 = 0.999;
 /// one-image variance ratio Mitsuba/rtdiff 1.00, 1st-99th percentile 0.83-1.18, image-wide z
 /// 0.56 / -0.26 / -0.20): no bias.
 const TEST_SEEDS: u32 = 32;
-/// False-alarm rate of the statistical check (Benjamini-Hochberg q).
-const FDR: f64 = 0.01;
-
-/// Why a pixel of a deterministic scene disagrees.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-enum Class {
-    /// A neighbouring pixel sees a different primitive or the background: the
-    /// pixel centre lies within a float32 rounding of a geometric outline.
-    Silhouette,
-    /// The camera ray hits within 1e-4 (barycentric) of a triangle edge: which of
-    /// two triangles owns the edge, or Mitsuba's non-watertight edges.
-    TriangleEdge,
-    /// Along the pixel's ray tree a light sample lies on opposite sides of the
-    /// shading and the geometric normal, or within 1.5 degrees of the geometric
-    /// or the shading plane: there n.l ~ 0.003 turns the float32 difference of the
-    /// two renderers' hit points and interpolated normals (~1e-7, from Embree's
-    /// barycentrics in Mitsuba against rtdiff's watertight ones) into ~1e-3, and
-    /// whether a tangential shadow ray grazes a neighbouring triangle hangs on the
-    /// last bits (the shading-normal terminator).
-    ShadowTerminator,
-    /// A blocked shadow ray on the pixel's tree meets its blocker within 1e-4
-    /// (barycentric, in f64) of an edge: Mitsuba's ray/triangle test (Embree 3,
-    /// not watertight) can let it through the crack.
-    ShadowEdge,
-    /// None of the above: a real disagreement.
-    Unexplained,
-}
-
-/// Classify pixel (x, y) of `scene` from rtdiff's own primary hits.
-fn classify(scene: &Scene, tracer: &dyn Tracer, x: u32, y: u32) -> Class {
-    let hit_at = |x: i64, y: i64| -> Option<Option<Hit>> {
-        if x < 0 || y < 0 || x >= scene.width as i64 || y >= scene.height as i64 {
-            return None;
-        }
-        Some(tracer.intersect(&scene.camera.pixel_centre_ray(x as u32, y as u32)))
-    };
-    let centre = hit_at(x as i64, y as i64).unwrap();
-    let object = |h: &Option<Hit>| h.map(|h| scene.material_of(h.prim));
-    for (dx, dy) in [(-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (1, 1), (-1, 1), (1, -1)] {
-        if let Some(n) = hit_at(x as i64 + dx, y as i64 + dy)
-            && (object(&n) != object(&centre) || n.is_none() != centre.is_none())
-        {
-            return Class::Silhouette;
-        }
-    }
-    let Some(h) = centre else { return Class::Unexplained };
-    let tree = rtdiff::debug::trace_pixel_with(scene, tracer, x, y).unwrap().root;
-    if has_terminator(scene, &tree) {
-        return Class::ShadowTerminator;
-    }
-    if has_shadow_edge(scene, &tree) {
-        return Class::ShadowEdge;
-    }
-    if (h.prim as usize) < scene.prims.triangles.len() && (1.0 - h.u - h.v).min(h.u).min(h.v) < 1e-4 {
-        return Class::TriangleEdge;
-    }
-    Class::Unexplained
-}
-
-/// True when a light sample of `n` or of its children is on opposite sides of the
-/// shading and geometric normals, or grazes the geometric plane (see [`Class`]).
-fn has_terminator(scene: &Scene, n: &RayNode) -> bool {
-    if let Some(h) = &n.hit {
-        let p = Vec3::from(h.position);
-        let ns = Vec3::from(h.normal);
-        let nt = scene.prims.triangles.len();
-        let ng = if (h.prim as usize) < nt {
-            scene.prims.triangles[h.prim as usize].normal().normalize()
-        } else {
-            (p - scene.prims.spheres[h.prim as usize - nt].center).normalize()
-        };
-        // sin(1.5 degrees) = 0.026.
-        let bad = n.lights.iter().any(|l| {
-            let dir = (Vec3::from(l.position) - p).normalize();
-            let (g, s) = (ng.dot(dir), ns.dot(dir) * ng.dot(ns).signum());
-            g * s < 0.0 || g.abs() < 0.026 || s.abs() < 0.026
-        });
-        if bad {
-            return true;
-        }
-    }
-    n.children.iter().any(|c| has_terminator(scene, c))
-}
-
-/// Barycentrics (f64) where the line `o + t d` crosses the plane of triangle `v`.
-fn barycentrics_f64(v: [Vec3; 3], o: Vec3, d: Vec3) -> [f64; 3] {
-    let f = |a: Vec3| [a.x as f64, a.y as f64, a.z as f64];
-    let (a, b, c, o, d) = (f(v[0]), f(v[1]), f(v[2]), f(o), f(d));
-    let sub = |x: [f64; 3], y: [f64; 3]| [x[0] - y[0], x[1] - y[1], x[2] - y[2]];
-    let cross =
-        |x: [f64; 3], y: [f64; 3]| [x[1] * y[2] - x[2] * y[1], x[2] * y[0] - x[0] * y[2], x[0] * y[1] - x[1] * y[0]];
-    let dot = |x: [f64; 3], y: [f64; 3]| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
-    let (e1, e2) = (sub(b, a), sub(c, a));
-    let p = cross(d, e2);
-    let det = dot(e1, p);
-    let s = sub(o, a);
-    let u = dot(s, p) / det;
-    let q = cross(s, e1);
-    let w = dot(d, q) / det;
-    [1.0 - u - w, u, w]
-}
-
-/// True when a blocked shadow ray of `n` or its children is fragile (see [`Class::ShadowEdge`]).
-fn has_shadow_edge(scene: &Scene, n: &RayNode) -> bool {
-    let near_edge = n.lights.iter().flat_map(|l| &l.shadow_rays).any(|s| match s.blocked_by {
-        Some((prim, _)) if (prim as usize) < scene.prims.triangles.len() => {
-            let v = scene.prims.triangles[prim as usize].v;
-            let (o, t) = (Vec3::from(s.origin), Vec3::from(s.target));
-            let b = barycentrics_f64(v, o, t - o);
-            b.iter().copied().fold(f64::INFINITY, f64::min) < 1e-4
-        }
-        _ => false,
-    });
-    near_edge || n.children.iter().any(|c| has_shadow_edge(scene, c))
-}
-
-/// Result of the deterministic check.
-#[derive(Debug)]
-struct Exact {
-    agreeing: f64,
-    max_rel: f32,
-    bad: Vec<(u32, u32, f32, Class)>,
-}
-
-impl Exact {
-    fn passed(&self) -> bool {
-        self.agreeing >= MIN_AGREEING && !self.bad.iter().any(|b| b.3 == Class::Unexplained)
-    }
-}
-
-fn rel(a: Vec3, b: Vec3) -> f32 {
-    let d = (a - b).abs();
-    let s = a.abs().max(b.abs()).max(Vec3::splat(FLOOR));
-    (d / s).max_element()
-}
-
-fn exact_check(scene: &Scene, reference: &Image, img: &Image) -> Exact {
-    assert_eq!((reference.width, reference.height), (img.width, img.height));
-    let tracer = backends::build_tracer(scene.prims.clone(), &scene.accel).unwrap();
-    let mut bad = Vec::new();
-    let mut max_rel = 0f32;
-    for y in 0..img.height {
-        for x in 0..img.width {
-            let r = rel(reference.get(x, y), img.get(x, y));
-            max_rel = max_rel.max(r);
-            if r > REL_TOL {
-                bad.push((x, y, r, classify(scene, tracer.as_ref(), x, y)));
-            }
-        }
-    }
-    let n = (img.width * img.height) as f64;
-    Exact { agreeing: 1.0 - bad.len() as f64 / n, max_rel, bad }
-}
-
-fn summary(e: &Exact) -> String {
-    let mut counts = std::collections::BTreeMap::new();
-    for b in &e.bad {
-        *counts.entry(format!("{:?}", b.3)).or_insert(0) += 1;
-    }
-    format!("{:.4}% agree (max rel {:.2e}), disagreeing {:?}", 100.0 * e.agreeing, e.max_rel, counts)
-}
 
 fn noisy_check(
     r: &Reference,
     tweak: &dyn Fn(&mut SceneFile),
     wrap: &dyn Fn(Box<dyn Tracer>) -> Box<dyn Tracer>,
 ) -> WelchReport {
+    noisy_check_with(r, &|seed| load(r, seed, tweak), wrap)
+}
+
+/// [`noisy_check`] of the loaded scene changed by `edit`.
+fn noisy_check_edited(r: &Reference, edit: &dyn Fn(&mut Scene)) -> WelchReport {
+    let scene = |seed| {
+        let mut s = load(r, seed, &no_tweak);
+        edit(&mut s);
+        s
+    };
+    noisy_check_with(r, &scene, &plain)
+}
+
+fn noisy_check_with(
+    r: &Reference,
+    scene: &dyn Fn(u64) -> Scene,
+    wrap: &dyn Fn(Box<dyn Tracer>) -> Box<dyn Tracer>,
+) -> WelchReport {
     let mean = Image::read_exr(&r.image).unwrap();
     let var = Image::read_exr(r.variance.as_ref().unwrap()).unwrap();
     let reference = Moments::from_mean_variance(&mean, &var, r.seeds).unwrap();
-    let imgs: Vec<Image> = (0..TEST_SEEDS).map(|k| render_with(&load(r, 1000 + k as u64, tweak), wrap)).collect();
+    let imgs: Vec<Image> = (0..TEST_SEEDS).map(|k| render_with(&scene(1000 + k as u64), wrap)).collect();
     let mut test = Moments::from_images(&imgs).unwrap();
     let mut reference = reference;
     numerically_black(&mut reference, &mut test);
     welch_test(&reference, &test, &WelchOptions { fdr: FDR, ..Default::default() }).unwrap()
 }
 
-/// Below this, a pixel-channel is black on both sides whatever its noise: the
-/// deterministic check's absolute tolerance (`REL_TOL * FLOOR` = 1e-5, 30x below
-/// the darkest non-zero 8-bit sRGB step, 3.0e-4).
-const BLACK: f64 = (REL_TOL * FLOOR) as f64;
-
-/// Pixel-channels whose mean and standard deviation are below [`BLACK`] on both
-/// sides become deterministic (variance 0), so the Welch test's exact tolerance
-/// (1e-5) judges them. Where an area light lies in the plane of a face (the cube's
-/// segment light runs along its top face, y = 0.5), n.l is exactly 0 in the model
-/// and the float32 rounding of the hit point (p.y = 0.5 +- 1 ulp) in either
-/// renderer: with the physical model's 1 / r^2 at r ~ 0.05, the top face shows
-/// 1e-6..3e-6 in one renderer and 0 in the other, t ~ 10-20 for a difference no
-/// image can show (measured: all 8-10 rejections of cube.physical with K = 16 / 8,
-/// and the only ones with 400 / 1200 seeds).
-fn numerically_black(a: &mut Moments, b: &mut Moments) {
-    for i in 0..a.mean.len() {
-        for c in 0..3 {
-            let black = |m: &Moments| m.mean[i][c].abs() < BLACK && m.variance[i][c].sqrt() < BLACK;
-            if black(a) && black(b) {
-                a.variance[i][c] = 0.0;
-                b.variance[i][c] = 0.0;
-            }
-        }
-    }
-}
-
-fn welch_summary(w: &WelchReport) -> String {
-    format!(
-        "{} of {} hypotheses rejected ({} pixels), global z {:.2?}, bias^2 {:.3e}, variance {:.3e}, exact mismatches {}",
-        w.rejected, w.tests, w.rejected_pixels, w.global_z, w.bias2, w.variance, w.exact_mismatches
-    )
+/// Mitsuba 3's own spawn rule (`spawn_ray`) in place of rtdiff's.
+fn mitsuba_spawn(f: &mut SceneFile) {
+    f.params.ray_offset = SpawnOffset::ScaledNormal { epsilon: MITSUBA_RAY_EPSILON };
 }
 
 #[test]
@@ -282,7 +103,10 @@ fn every_referenced_scene_agrees_with_mitsuba() {
         if r.deterministic {
             let scene = load(r, 0, &no_tweak);
             let img = render_with(&scene, &plain);
-            let e = exact_check(&scene, &Image::read_exr(&r.image).unwrap(), &img);
+            // Mitsuba's own integrators start rays by their own rule: rtdiff's render with it
+            // tells which pixels differ only by that.
+            let offset = r.native.then(|| render_with(&load(r, 0, &mitsuba_spawn), &plain));
+            let e = exact_check_with(&scene, &Image::read_exr(&r.image).unwrap(), &img, offset.as_ref());
             println!("{:<42} exact  {} [{:.2} s]", r.name(), summary(&e), t0.elapsed().as_secs_f64());
             for b in e.bad.iter().take(12) {
                 println!("    pixel ({}, {}) rel {:.2e} {:?}", b.0, b.1, b.2, b.3);
@@ -324,7 +148,10 @@ fn exact_fails(name: &str, tweak: &dyn Fn(&mut SceneFile), edit: &dyn Fn(&mut Sc
 
 #[test]
 fn light_intensity_one_percent_high_fails_the_exact_check() {
-    for name in ["cornell_box.phong", "spheres.physical", "monkey.phong"] {
+    // Against the plugin's references and against Mitsuba's own point emitters and BSDFs.
+    for name in
+        ["cornell_box.phong", "spheres.physical", "monkey.phong", "spheres.physical.native", "teapot.physical.native"]
+    {
         exact_fails(name, &|f| scale_lights(f, 1.01), &|_| {});
     }
 }
@@ -344,15 +171,70 @@ fn texture_v_flipped_fails_the_exact_check() {
     });
 }
 
+fn mirror_weight_one_percent_high(s: &mut Scene) {
+    for m in &mut s.materials {
+        if m.is_reflective() {
+            m.ks *= 1.01;
+        }
+    }
+}
+
 #[test]
 fn mirror_weight_one_percent_high_fails_the_exact_check() {
-    exact_fails("cornell_box.physical", &no_tweak, &|s| {
-        for m in &mut s.materials {
-            if m.is_reflective() {
-                m.ks *= 1.01;
-            }
+    exact_fails("cornell_box.physical", &no_tweak, &mirror_weight_one_percent_high);
+}
+
+/// The same against Mitsuba's own `blendbsdf` (diffuse + smooth `conductor`) and `path`
+/// integrator (one bounce, 4 L(1/2) - L(1)): the Welch check must fail. The mirror's pixels
+/// reject one by one (the image-wide z is dominated by the pixels beside the point light, whose
+/// variance is 10^5 times the mirror's).
+#[test]
+fn mirror_weight_one_percent_high_fails_against_the_native_reference() {
+    let r = reference("cornell_box.physical.native");
+    let w = noisy_check_edited(&r, &mirror_weight_one_percent_high);
+    println!("cornell_box.physical.native, Ks x1.01: {}", welch_summary(&w));
+    assert!(!w.passed && w.rejected_pixels > 100, "a 1% stronger mirror passed: {}", welch_summary(&w));
+}
+
+/// Texture wrap modes (repeat, mirror, clamp) against Mitsuba's own `bitmap` `wrap_mode`, with
+/// nearest and bilinear lookups: scenes/texture_wrap.json frames each rectangle (uvs -1 to 2 and
+/// -0.5 to 1.5) so that no pixel centre lies on a texel edge or a triangle edge, and every pixel
+/// must agree (not 99.9%).
+#[test]
+fn wrap_modes_agree_with_mitsubas_bitmap_on_every_pixel() {
+    for name in ["texture_wrap.physical.native", "texture_wrap_bilinear.physical.native", "texture_wrap.phong"] {
+        let r = reference(name);
+        let scene = load(&r, 0, &no_tweak);
+        let e = exact_check(&scene, &Image::read_exr(&r.image).unwrap(), &render_with(&scene, &plain));
+        println!("{name}: {}", summary(&e));
+        assert!(e.bad.is_empty(), "{name}: {}", summary(&e));
+    }
+}
+
+/// One wrap mode swapped (repeat and mirror exchanged, or clamp read as repeat) must fail against
+/// Mitsuba's `bitmap`, nearest and bilinear.
+#[test]
+fn wrap_mode_swapped_fails_the_exact_check() {
+    use rtdiff::texture::WrapMode;
+    let swap = |f: &mut SceneFile| {
+        for m in f.materials.values_mut() {
+            m.texture_wrap = match m.texture_wrap {
+                Some(WrapMode::Repeat) => Some(WrapMode::Mirror),
+                Some(WrapMode::Mirror) => Some(WrapMode::Repeat),
+                w => w,
+            };
         }
-    });
+    };
+    let clamp_as_repeat = |f: &mut SceneFile| {
+        for m in f.materials.values_mut().filter(|m| m.texture_wrap == Some(WrapMode::Clamp)) {
+            m.texture_wrap = Some(WrapMode::Repeat);
+        }
+    };
+    for name in ["texture_wrap.physical.native", "texture_wrap_bilinear.physical.native"] {
+        let a = exact_fails(name, &swap, &|_| {});
+        let b = exact_fails(name, &clamp_as_repeat, &|_| {});
+        assert!(a.agreeing < 0.9 && b.agreeing < 0.9, "{name}: {} / {}", summary(&a), summary(&b));
+    }
 }
 
 #[test]
@@ -391,7 +273,8 @@ fn leaky(t: Box<dyn Tracer>) -> Box<dyn Tracer> {
 
 #[test]
 fn noisy_check_catches_one_percent_light_bias() {
-    for name in ["cornell_box_parallelogram_light.physical", "cube.phong"] {
+    // The plugin's parallelogram and segment lights, and Mitsuba's own area emitter.
+    for name in ["cornell_box_parallelogram_light.physical", "cube.phong", "cornell_box_area_light.physical.native"] {
         let r = reference(name);
         let w = noisy_check(&r, &|f| scale_lights(f, 1.01), &plain);
         println!("{name} light x1.01: {}", welch_summary(&w));

@@ -282,9 +282,11 @@ def check_cube(ck, d, fname, textured):
     mats = read_mtl(os.path.join(d, "cube_textured.mtl"))
     m = mats.get("cube_textured", {})
     ck.check(all(t["mtl"] == "cube_textured" for t in o.tris), f"{name}: every triangle uses material cube_textured")
-    tex = m.get("map_Kd", [None])[0]
+    tex = m.get("map_Kd", [None])[-1]
     ck.check(tex == "cube_texture.png" and os.path.isfile(os.path.join(d, tex or "-")),
              f"{name}: map_Kd names an existing texture ({tex})")
+    ck.check(m.get("map_Kd", [])[:2] == ["-clamp", "on"],
+             f"{name}: map_Kd -clamp on (the reference scenes keep clamped lookups): {m.get('map_Kd')}")
     w, h, rows = read_png(os.path.join(d, "cube_texture.png"))
     ck.check((w, h) == (8, 8), f"{name}: texture is 8x8 ({w}x{h})")
     ck.check(rows[0][0] == (230, 40, 40) and rows[7][0] == (40, 70, 230),
@@ -477,6 +479,16 @@ def check_cube_formats(ck, d):
         ck.check(got_png == png, f"{name}: the texture is cube_texture.png")
 
 
+def check_wrap_rect(ck, d):
+    o = Obj(os.path.join(d, "wrap_rect.obj"))
+    ck.check(len(o.tris) == 2 and len(o.v) == 4, f"wrap_rect: 2 triangles, 4 vertices ({len(o.tris)}, {len(o.v)})")
+    ck.check(all(dot(o.normal(t), (0, 0, -1)) > 0.999 for t in o.tris), "wrap_rect: both triangles face -z")
+    us, vs = [uv[0] for uv in o.vt], [uv[1] for uv in o.vt]
+    ck.check((min(us), max(us), min(vs), max(vs)) == (-1, 2, -0.5, 1.5),
+             f"wrap_rect: u in [-1, 2], v in [-0.5, 1.5] ({min(us)}, {max(us)}, {min(vs)}, {max(vs)})")
+    check_common(ck, "wrap_rect", o)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--dir", default=DEFAULT_DIR)
@@ -488,7 +500,8 @@ def main():
                lambda: check_cube(ck, a.dir, "cube_textured.obj", True),
                lambda: check_cornell(ck, a.dir),
                lambda: check_icosphere(ck, a.dir),
-               lambda: check_cube_formats(ck, a.dir)):
+               lambda: check_cube_formats(ck, a.dir),
+               lambda: check_wrap_rect(ck, a.dir)):
         try:
             fn()
         except (OSError, ValueError, KeyError, IndexError, TypeError, ZeroDivisionError) as e:

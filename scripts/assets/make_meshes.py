@@ -226,7 +226,9 @@ def cube_textured_mtl():
             "Kd 1 1 1\n"
             "Ks 0 0 0\n"
             "Ns 1\n"
-            "map_Kd cube_texture.png\n")
+            "# -clamp on: the reference scenes keep the course reports' clamped lookups (rtdiff and\n"
+            "# Mitsuba repeat a texture by default, as OBJ viewers do).\n"
+            "map_Kd -clamp on cube_texture.png\n")
 
 
 # ------------------------------------------------------------------ the cube as glTF 2.0 and STL
@@ -454,6 +456,29 @@ def icosphere_obj(level=3):
     return "".join(out)
 
 
+# ------------------------------------------------------------------ wrap-mode rectangle
+def wrap_rect():
+    header = [GENERATED,
+              "A 1.5 x 1 rectangle in the plane z = 0, facing -z, with uvs beyond [0, 1] on every side:",
+              "u from -1 to 2, v from -0.5 to 1.5 (three texture widths, two heights), so that a texture's",
+              "wrap mode (repeat, mirror, clamp) shows on all four sides (scenes/texture_wrap.json).",
+              "Seen from -z its diagonal has slope 2/3 in pixels of a 96 x 64 footprint: it never",
+              "passes through a pixel centre."]
+    return "".join(f"# {h}\n" for h in header) + (
+        "o wrap_rect\n"
+        "v 0.75 -0.5 0\n"
+        "v -0.75 -0.5 0\n"
+        "v -0.75 0.5 0\n"
+        "v 0.75 0.5 0\n"
+        "vt -1 -0.5\n"
+        "vt 2 -0.5\n"
+        "vt 2 1.5\n"
+        "vt -1 1.5\n"
+        "vn 0 0 -1\n"
+        "f 1/1/1 2/2/1 3/3/1\n"
+        "f 1/1/1 3/3/1 4/4/1\n")
+
+
 # ------------------------------------------------------------------ main
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -468,6 +493,7 @@ def main():
         "cornell_box.obj": cornell_box(),
         "cornell_box.mtl": cornell_mtl(),
         "icosphere.obj": icosphere_obj(3),
+        "wrap_rect.obj": wrap_rect(),
     }
     for name, text in files.items():
         write(os.path.join(a.out, name), text)

@@ -1,13 +1,18 @@
 """Mitsuba 3 side of rtdiff's image oracle: the reports' Whitted integrator as a Mitsuba plugin,
 and a render loop over a scene exported by `rtdiff export SCENE --to mitsuba -o DIR`.
 
+An export is one of two oracles (rtdiff.json "oracle"). A native export uses only Mitsuba's own
+emitters, BSDFs and integrators; `load` and `render` then run its recipe (`render_native`: one
+`mi.render` per emitter file and BSDF file, summed with the recipe's weights). A plugin export
+uses the integrator below.
+
 Mitsuba 3 has no Phong BSDF, no Whitted integrator, no glossy lobe of the reports' kind, no
 segment light and no parallelogram light with bilinear corner colours. `rtdiff_whitted`
 (registered with `mi.register_integrator`) adds them: it intersects with Mitsuba's
 `scene.ray_intersect` / `ray_test` (Embree inside Mitsuba), takes camera rays from Mitsuba's
 sensor (`perspective` / `thinlens`), reads the hit point, geometric normal and interpolated
 shading normal from Mitsuba's surface interaction, looks up kd through Mitsuba's `diffuse` BSDF and
-`bitmap` texture (nearest / bilinear, clamped), and draws every random number from Mitsuba's
+`bitmap` texture (nearest / bilinear, the material's wrap mode), and draws every random number from Mitsuba's
 sampler. Only the reports' model is written here, from the course reports (../shared/seeds/) and
 docs/oracles.md, independently of rtdiff's Rust code:
 
@@ -46,6 +51,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import sys
 import time
 
 import numpy as np
@@ -64,13 +70,54 @@ def pick_variant(requested: str | None = None) -> str:
 
 
 def setup(variant: str | None = None):
-    """Select the Mitsuba variant and register the plugin; returns the mitsuba module."""
+    """Select the Mitsuba variant and register the plugin; returns the mitsuba module.
+
+    With RTDIFF_MITSUBA_ISA=avx2 (set by scripts/mitsuba/as-avx2.sh) Dr.Jit's LLVM backend
+    compiles for an AVX2 CPU without AVX-512 (see `emulate_isa`)."""
     variant = pick_variant(variant)
     import mitsuba as mi
 
     mi.set_variant(variant)
+    isa = os.environ.get("RTDIFF_MITSUBA_ISA")
+    if isa and variant.startswith("llvm"):
+        emulate_isa(mi, isa)
     _register(mi)
     return mi
+
+
+#: LLVM target CPU standing for each emulated instruction set.
+EMULATED_CPUS = {"avx2": ("haswell", 8)}
+
+
+def emulate_isa(mi, isa: str):
+    """Make Dr.Jit's LLVM backend generate code as on a CPU with instruction set `isa` (only
+    "avx2": target CPU haswell, 8-wide vectors, every AVX-512, AVX10 and AMX feature of the
+    host's list switched off), through drjit-core's `jit_llvm_set_target`, which the Python
+    module does not expose. Embree inside Mitsuba picks its own kernels: scripts/mitsuba/as-avx2.sh
+    caps those with Embree's `max_isa` option. Prints the target to stderr."""
+    import ctypes
+
+    import drjit as dr
+
+    if isa not in EMULATED_CPUS:
+        raise ValueError(f"RTDIFF_MITSUBA_ISA={isa!r}: only {sorted(EMULATED_CPUS)} can be emulated")
+    cpu, width = EMULATED_CPUS[isa]
+    core = ctypes.CDLL(os.path.join(os.path.dirname(dr.__file__), "libdrjit-core.so"))
+    # C++ linkage: jit_llvm_set_target(const char*, const char*, uint32_t) and its getters.
+    set_target = core._Z19jit_llvm_set_targetPKcS0_j
+    set_target.argtypes = [ctypes.c_char_p, ctypes.c_char_p, ctypes.c_uint32]
+    get_features = core._Z24jit_llvm_target_featuresv
+    get_features.restype = ctypes.c_char_p
+    get_cpu = core._Z19jit_llvm_target_cpuv
+    get_cpu.restype = ctypes.c_char_p
+    get_width = core._Z21jit_llvm_vector_widthv
+    get_width.restype = ctypes.c_uint32
+    dr.eval(mi.Float(0.0))  # the LLVM backend initialises on first use; the target is set after
+    host = (get_features() or b"").decode()
+    wide = ("+avx512", "+evex512", "+avx10", "+amx")
+    features = ",".join("-" + f[1:] if f.startswith(wide) else f for f in host.split(",") if f)
+    set_target(cpu.encode(), features.encode(), width)
+    print(f"rtdiff_mitsuba: Dr.Jit LLVM target {get_cpu().decode()}, {get_width()}-wide, AVX-512 off", file=sys.stderr)
 
 
 def gamma(n: int) -> float:
@@ -144,7 +191,11 @@ def _register(mi):
             self.bg = self.cfg["background"]
             offset = self.cfg.get("ray_offset", {"kind": "robust"})
             # The reports' fixed offset (origin + epsilon * unit direction), when the scene asks for it.
+            if offset["kind"] not in ("robust", "fixed", "scaled-normal"):
+                raise ValueError(f"{resolved}: unknown ray_offset kind {offset['kind']!r}")
             self.fixed_epsilon = float(offset["epsilon"]) if offset["kind"] == "fixed" else None
+            # Mitsuba's own spawn_ray (epsilon (1 + max|p|) along the normal), when the scene asks for it.
+            self.scaled_epsilon = float(offset["epsilon"]) if offset["kind"] == "scaled-normal" else None
             self._tables = None
 
         # --- per-shape tables ---------------------------------------------------------------
@@ -219,6 +270,8 @@ def _register(mi):
             if self.fixed_epsilon is not None:
                 return p + self.fixed_epsilon * dr.normalize(w)
             n = dr.select(dr.dot(w, ng) < 0.0, -ng, ng)
+            if self.scaled_epsilon is not None:
+                return p + self.scaled_epsilon * (1.0 + dr.max(dr.abs(p))) * n
             po = p + dr.dot(dr.abs(n), err) * n
             return mi.Point3f(step_away(po.x, n.x), step_away(po.y, n.y), step_away(po.z, n.z))
 
@@ -450,8 +503,16 @@ def _register(mi):
 
 
 def load(mi, scene_dir: str):
-    """Load DIR/scene.xml without merging shapes (the integrator maps shape ids to materials)."""
-    return mi.load_file(os.path.join(scene_dir, "scene.xml"), optimize=False)
+    """Load an export. A plugin export: DIR/scene.xml without merging shapes (the integrator maps
+    shape ids to materials). A native export: every scene of its recipe (rtdiff.json "recipe":
+    each emitter file with each BSDF file, through scene.xml's $lights and $bsdfs), as
+    {(lights, bsdfs): scene}."""
+    cfg = config(scene_dir)
+    path = os.path.join(scene_dir, "scene.xml")
+    if cfg.get("oracle") != "native":
+        return mi.load_file(path, optimize=False)
+    recipe = cfg["recipe"]
+    return {(l, b): mi.load_file(path, lights=l, bsdfs=b) for l in recipe["lights"] for b, _ in recipe["terms"]}
 
 
 def config(scene_dir: str) -> dict:
@@ -460,9 +521,15 @@ def config(scene_dir: str) -> dict:
 
 
 def render(mi, scene, cfg: dict, seed: int, passes: int | None = None) -> np.ndarray:
-    """One image (H x W x 3 float32): the mean of `passes` samples per pixel, pixel positions as
-    rtdiff places them (centre for spp 1, n x n jittered grid for n*n, uniform otherwise), each
-    with one lens sample when depth of field is on. `passes` defaults to spp * dof_samples."""
+    """One image (H x W x 3 float32) of an export loaded by `load`.
+
+    Native: Mitsuba's own render loop (`mi.render`) on each scene of the recipe, all with the
+    same seed, summed with the recipe's weights in float64 (`passes` replaces the samples per
+    pixel). Plugin: the mean of `passes` samples per pixel, pixel positions as rtdiff places them
+    (centre for spp 1, n x n jittered grid for n*n, uniform otherwise), each with one lens sample
+    when depth of field is on. `passes` defaults to spp * dof_samples."""
+    if cfg.get("oracle") == "native":
+        return render_native(mi, scene, cfg, seed, passes)
     import drjit as dr
 
     W, H = int(cfg["width"]), int(cfg["height"])
@@ -495,6 +562,23 @@ def render(mi, scene, cfg: dict, seed: int, passes: int | None = None) -> np.nda
         dr.eval(L)
         acc += np.stack([np.array(L[0]), np.array(L[1]), np.array(L[2])], axis=-1).reshape(H, W, 3)
     return (acc / passes).astype(np.float32)
+
+
+def render_native(mi, scenes: dict, cfg: dict, seed: int, spp: int | None = None) -> np.ndarray:
+    """The recipe of a native export: sum over its emitter files and BSDF terms of
+    weight * mi.render(scene, seed), every render with the same seed (the terms of one mirror
+    bounce, 4 L(1/2) - L(1), cancel diffuse interreflection sample by sample)."""
+    recipe = cfg["recipe"]
+    weights = dict((b, w) for b, w in recipe["terms"])
+    spp = spp or int(recipe["spp"])
+    acc = np.zeros((int(cfg["height"]), int(cfg["width"]), 3), dtype=np.float64)
+    # Hashed, as the plugin's seeds are: Mitsuba seeds each lane's PCG32 with only a 4-round TEA of
+    # (seed, lane), so consecutive seeds are kept well apart.
+    mixed = _seed32(seed, 0)
+    for (_, b), scene in scenes.items():
+        img = np.array(mi.render(scene, seed=mixed, spp=spp), dtype=np.float64)
+        acc += weights[b] * img[:, :, :3]
+    return acc.astype(np.float32)
 
 
 def _camera_sample(mi, sensor, integrator, scene, sampler, x, y, W, H, spp, s, k, square, lens_on):
@@ -548,6 +632,7 @@ def read_exr(path: str) -> np.ndarray:
 
 
 def timed_render(mi, scene_dir: str, seed: int, passes: int | None = None):
+    """Load the export in `scene_dir` and render it once; returns (image, seconds, config)."""
     cfg = config(scene_dir)
     scene = load(mi, scene_dir)
     t0 = time.perf_counter()

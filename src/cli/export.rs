@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use crate::error::Result;
-use crate::scene::export::mitsuba::export_mitsuba_file;
+use crate::scene::export::mitsuba::{OracleChoice, export_mitsuba_file, oracle_line};
 use crate::shading::ShadingModelKind;
 
 /// Target renderers of `rtdiff export`.
@@ -13,6 +13,27 @@ pub enum ExportTarget {
     Mitsuba,
     /// Wavefront OBJ + MTL for any renderer (face i is rtdiff's primitive i), camera and lights in scene.json.
     Obj,
+}
+
+/// The oracle an export writes (`--oracle`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum OracleArg {
+    /// Native wherever Mitsuba's own plugins express the scene, else the plugin.
+    Auto,
+    /// Mitsuba's own emitters, BSDFs and integrators, or an error saying why not.
+    Native,
+    /// The rtdiff_whitted plugin (the reports' model in Python on Mitsuba's intersections).
+    Plugin,
+}
+
+impl From<OracleArg> for OracleChoice {
+    fn from(a: OracleArg) -> Self {
+        match a {
+            OracleArg::Auto => OracleChoice::Auto,
+            OracleArg::Native => OracleChoice::Native,
+            OracleArg::Plugin => OracleChoice::Plugin,
+        }
+    }
 }
 
 /// Arguments of `rtdiff export`.
@@ -32,6 +53,10 @@ pub struct ExportArgs {
     /// Switch every material to this shading model (default: as the scene file says).
     #[arg(long, value_parser = parse_model)]
     pub model: Option<ShadingModelKind>,
+    /// Which oracle to write: Mitsuba's own emitters, BSDFs and integrators (native), the
+    /// rtdiff_whitted plugin, or native wherever Mitsuba can express the scene (auto).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub oracle: OracleArg,
     /// Print the export report as JSON.
     #[arg(long)]
     pub json: bool,
@@ -53,7 +78,7 @@ pub fn run(args: &ExportArgs) -> Result<()> {
     let ov = args.image.overrides()?;
     let report = match args.to {
         ExportTarget::Obj => return run_obj(args, &ov),
-        ExportTarget::Mitsuba => export_mitsuba_file(&args.scene, &ov, args.model, &args.output)?,
+        ExportTarget::Mitsuba => export_mitsuba_file(&args.scene, &ov, args.model, &args.output, args.oracle.into())?,
     };
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report).unwrap_or_default());
@@ -65,6 +90,7 @@ pub fn run(args: &ExportArgs) -> Result<()> {
             report.files.len(),
             if report.deterministic { "deterministic: 1 sample per pixel" } else { "stochastic" }
         );
+        println!("oracle: {}", oracle_line(&report));
     }
     if !args.quiet {
         for w in &report.warnings {

@@ -67,6 +67,9 @@ pub struct SceneFlags {
     /// Turn a feature on or off, e.g. `--feature bloom=on` (repeatable).
     #[arg(long = "feature", value_name = "NAME=on|off")]
     pub features: Vec<String>,
+    /// Recursion depth of mirror reflections and transparency (`params.max_depth`, 0 to 64).
+    #[arg(long, value_parser = limits::ranged::<u32>(0, limits::MAX_DEPTH as u64))]
+    pub max_depth: Option<u32>,
 }
 
 impl SceneFlags {
@@ -78,6 +81,7 @@ impl SceneFlags {
             spp: self.spp,
             seed: self.seed,
             features: self.features.iter().map(|f| parse_feature(f)).collect::<Result<_>>()?,
+            max_depth: self.max_depth,
             ..Default::default()
         })
     }

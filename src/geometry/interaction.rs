@@ -56,10 +56,11 @@ impl SurfaceInteraction {
 pub struct Spawner {
     /// The point.
     p: Vec3,
+    /// Its geometric normal (read by the scaled-normal offset).
+    ng: Vec3,
     /// The policy.
     policy: SpawnOffset,
-    /// Both robust origins (`None` under a fixed offset, which depends on
-    /// each ray's direction and needs neither).
+    /// Both robust origins (`None` under the other offsets, made ray by ray).
     sides: Option<SideOrigins>,
 }
 
@@ -70,8 +71,8 @@ impl Spawner {
         let w = target - self.p;
         let o = match &self.sides {
             Some(sides) => sides.origin(w),
-            // The fixed offset reads neither the error bound nor the normal.
-            None => spawn_origin(self.policy, self.p, Vec3::ZERO, Vec3::ZERO, w),
+            // The other offsets do not read the error bound.
+            None => spawn_origin(self.policy, self.p, Vec3::ZERO, self.ng, w),
         };
         Ray::with_range(o, target - o, 0.0, t_max)
     }
@@ -82,7 +83,7 @@ impl SurfaceInteraction {
     #[inline]
     pub fn spawner(&self, policy: SpawnOffset) -> Spawner {
         let sides = matches!(policy, SpawnOffset::Robust).then(|| SideOrigins::new(self.p, self.p_err, self.ng));
-        Spawner { p: self.p, policy, sides }
+        Spawner { p: self.p, ng: self.ng, policy, sides }
     }
 }
 
@@ -146,7 +147,7 @@ mod tests {
     use super::*;
 
     /// The spawner's rays are `spawn_ray_to`'s, bit for bit, on both sides
-    /// of triangles and spheres (far from the origin too), under both policies.
+    /// of triangles and spheres (far from the origin too), under every policy.
     #[test]
     fn spawner_rays_are_spawn_ray_to() {
         let tri = Triangle {
@@ -163,7 +164,11 @@ mod tests {
             Vec3::new(-1.0e4, 3.0, 7.0),
         ];
         for si in [si_tri, si_sphere] {
-            for policy in [SpawnOffset::Robust, SpawnOffset::Fixed { epsilon: 1e-3 }] {
+            for policy in [
+                SpawnOffset::Robust,
+                SpawnOffset::Fixed { epsilon: 1e-3 },
+                SpawnOffset::ScaledNormal { epsilon: 8.9e-5 },
+            ] {
                 let sp = si.spawner(policy);
                 for t in targets {
                     let (a, b) = (sp.ray_to(t, 0.999), si.spawn_ray_to(policy, t, 0.999));

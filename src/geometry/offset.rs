@@ -29,7 +29,19 @@ pub enum SpawnOffset {
         /// Distance along the (unit) direction.
         epsilon: f32,
     },
+    /// Mitsuba 3's `spawn_ray`: the origin pushed `epsilon (1 + max|p|)` along the geometric
+    /// normal, to the side the new ray goes (Mitsuba's epsilon is 1500 * 2^-24 = 8.94e-5).
+    /// The image checks re-render with it to tell which pixels differ only by where Mitsuba's
+    /// own integrators start their rays.
+    ScaledNormal {
+        /// Push per unit of `1 + max|p|`.
+        epsilon: f32,
+    },
 }
+
+/// Mitsuba 3's ray epsilon (`math::RayEpsilon<float>` = 1500 * 2^-24), the `epsilon` of
+/// [`SpawnOffset::ScaledNormal`] that reproduces its `spawn_ray`.
+pub const MITSUBA_RAY_EPSILON: f32 = 1500.0 * (f32::EPSILON * 0.5);
 
 /// Error bound of a point on a triangle computed as `b0 p0 + b1 p1 + b2 p2`
 /// (pbrt-v4, eq. 6.34): `gamma(7) (|b0 p0| + |b1 p1| + |b2 p2|)`, floored on
@@ -131,6 +143,11 @@ pub fn spawn_origin(policy: SpawnOffset, p: Vec3, p_err: Vec3, n: Vec3, w: Vec3)
     match policy {
         SpawnOffset::Robust => offset_origin(p, p_err, n, w),
         SpawnOffset::Fixed { epsilon } => p + epsilon * w.normalize_or_zero(),
+        SpawnOffset::ScaledNormal { epsilon } => {
+            let n = n.normalize_or_zero();
+            let push = epsilon * (1.0 + p.abs().max_element());
+            p + if w.dot(n) < 0.0 { -push } else { push } * n
+        }
     }
 }
 
@@ -172,6 +189,18 @@ mod tests {
                 assert_eq!(a.to_array().map(f32::to_bits), b.to_array().map(f32::to_bits), "p {p} n {n} w {w}");
             }
         }
+    }
+
+    #[test]
+    fn scaled_normal_is_mitsubas_spawn_ray() {
+        // Mitsuba: o = p + mulsign(n (1 + max|p|) RayEpsilon, dot(n, d)).
+        let p = Vec3::new(-3.0, 0.5, 1.0);
+        let policy = SpawnOffset::ScaledNormal { epsilon: MITSUBA_RAY_EPSILON };
+        let up = spawn_origin(policy, p, Vec3::ZERO, Vec3::Y * 2.0, Vec3::new(0.3, 1.0, 0.0));
+        let down = spawn_origin(policy, p, Vec3::ZERO, Vec3::Y * 2.0, Vec3::new(0.3, -1.0, 0.0));
+        assert!((up.y - p.y - 4.0 * 8.9407e-5).abs() < 1e-7, "{up}");
+        assert!((p.y - down.y - 4.0 * 8.9407e-5).abs() < 1e-7, "{down}");
+        assert_eq!((up.x, up.z), (p.x, p.z));
     }
 
     #[test]

@@ -108,7 +108,11 @@ impl<'a> Whitted<'a> {
             && let Some(t) = &m.kd_texture
         {
             c.texture_lookups += 1;
-            return if self.plan.bilinear { t.bilinear(it.uv.x, it.uv.y) } else { t.nearest(it.uv.x, it.uv.y) };
+            return if self.plan.bilinear {
+                t.bilinear(it.uv.x, it.uv.y, m.wrap)
+            } else {
+                t.nearest(it.uv.x, it.uv.y, m.wrap)
+            };
         }
         m.kd
     }

@@ -128,6 +128,8 @@ pub struct MtlMaterial {
     pub map_kd: Option<PathBuf>,
     /// Where `map_kd` was written, when it came from an MTL file.
     pub map_kd_source: Option<TextureSource>,
+    /// `map_Kd -clamp on`: the texture clamps outside uv [0, 1] (it repeats otherwise).
+    pub map_kd_clamp: bool,
     /// A diffuse texture held in the mesh file itself (a glTF data URI or buffer view).
     pub map_kd_embedded: Option<EmbeddedImage>,
     /// A colour the texture's texels are multiplied by (glTF's base colour factor; an MTL's

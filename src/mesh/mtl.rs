@@ -259,10 +259,20 @@ pub(crate) fn convert(m: tobj::Material, mtl: &Path, source: Option<&(usize, Str
         ks: m.specular.map(Vec3::from),
         ns: m.shininess,
         opacity,
+        map_kd_clamp: source.is_some_and(|(_, written)| texture_clamp(written)),
         map_kd,
         map_kd_source,
         ..Default::default()
     }
+}
+
+/// True when a texture statement's options hold `-clamp on` (the MTL specification's default is
+/// off: the texture repeats).
+pub fn texture_clamp(written: &str) -> bool {
+    let w: Vec<&str> = written.split_whitespace().collect();
+    // Options come before the file name; the last `-clamp` wins.
+    let name_at = w.len().saturating_sub(1);
+    w[..name_at].windows(2).rfind(|p| p[0] == "-clamp").is_some_and(|p| p[1] == "on")
 }
 
 #[cfg(test)]
@@ -273,6 +283,21 @@ mod tests {
         let mut w = Vec::new();
         let lib = parse(Path::new("m.mtl"), text, &mut w);
         (lib, w)
+    }
+
+    #[test]
+    fn map_kd_clamp_option() {
+        assert!(texture_clamp("-clamp on tex.png"));
+        assert!(texture_clamp("-s 2 2 1 -clamp on \"my tex.png\""));
+        assert!(!texture_clamp("-clamp off tex.png"));
+        assert!(!texture_clamp("tex.png"));
+        assert!(!texture_clamp("-clamp on -clamp off tex.png"));
+        // A file named like the option is a file name, not an option.
+        assert!(!texture_clamp("-clamp"));
+        let (lib, _) = parse_str("newmtl a\nmap_Kd -clamp on t.png\n");
+        let m = convert(lib.materials[0].clone(), Path::new("m.mtl"), lib.map_kd.get("a"));
+        assert!(m.map_kd_clamp);
+        assert!(m.map_kd.unwrap().ends_with("t.png"));
     }
 
     #[test]

@@ -29,7 +29,20 @@ struct Manifest {
 
 #[derive(Clone, Debug, Deserialize)]
 struct ManifestEntry {
+    name: String,
     scene: String,
+    /// "native" (Mitsuba's own plugins) or "plugin" (absent in manifests before native references).
+    #[serde(default)]
+    oracle: Option<String>,
+    /// The entry's own image size, camera samples and recursion depth, where not the manifest's or the scene's.
+    #[serde(default)]
+    width: Option<u32>,
+    #[serde(default)]
+    height: Option<u32>,
+    #[serde(default)]
+    spp: Option<u32>,
+    #[serde(default)]
+    max_depth: Option<u32>,
     model: ShadingModelKind,
     deterministic: bool,
     seeds: Vec<u64>,
@@ -49,6 +62,8 @@ pub struct MitsubaRow {
     pub scene: String,
     /// Shading model.
     pub model: ShadingModelKind,
+    /// Made by Mitsuba's own emitters, BSDFs and integrators (else by the rtdiff_whitted plugin).
+    pub native: bool,
     /// Pixel-centre scene (false: area lights, the reference is a mean over seeds).
     pub deterministic: bool,
     /// Seeds averaged in the reference.
@@ -108,10 +123,15 @@ pub fn stored_reference(
     height: u32,
 ) -> Result<Option<StoredReference>> {
     let Some(m) = manifest(root)? else { return Ok(None) };
-    if (m.width, m.height) != (width, height) {
-        return Ok(None);
-    }
-    let Some(e) = m.references.iter().find(|e| e.scene == scene && e.model == model && e.features.is_empty()) else {
+    // The scene as its file stands: no feature switch, camera samples or depth of the entry's own.
+    let Some(e) = m.references.iter().find(|e| {
+        e.scene == scene
+            && e.model == model
+            && e.features.is_empty()
+            && e.spp.is_none()
+            && e.max_depth.is_none()
+            && (e.width.unwrap_or(m.width), e.height.unwrap_or(m.height)) == (width, height)
+    }) else {
         return Ok(None);
     };
     let dir = root.join("reference");
@@ -159,7 +179,24 @@ fn compare_one(root: &Path, dir: &Path, images: &Path, m: &Manifest, e: &Manifes
     let scene_path = root.join(&e.scene);
     let mut file = Scene::read_file(&scene_path)?;
     force_shading_model(&mut file, e.model);
-    let ov = Overrides { width: Some(m.width), height: Some(m.height), seed: Some(0), ..Default::default() };
+    // The manifest writes switches as `NAME=on|off`, as make_references.py passes them to `--feature`.
+    let features = e
+        .features
+        .iter()
+        .map(|f| match f.split_once('=') {
+            Some((name, v @ ("on" | "off"))) => Ok((name.to_string(), v == "on")),
+            _ => Err(Error::Invalid(format!("reference/manifest.json: feature '{f}' is not NAME=on|off"))),
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let ov = Overrides {
+        width: Some(e.width.unwrap_or(m.width)),
+        height: Some(e.height.unwrap_or(m.height)),
+        seed: Some(0),
+        spp: e.spp,
+        max_depth: e.max_depth,
+        features,
+        ..Default::default()
+    };
     let scene = Scene::from_file_with(file, &scene_path, &ov)?;
     let tracer = crate::backends::build_tracer(scene.prims.clone(), &scene.accel)?;
     let r = render(&scene, tracer.as_ref(), &RenderOptions { threads: None, quiet: true })?;
@@ -168,8 +205,8 @@ fn compare_one(root: &Path, dir: &Path, images: &Path, m: &Manifest, e: &Manifes
     let metrics = compare(&reference, &ours, &CompareOptions::default())?;
     let f = flip(&reference, &ours, FlipMode::Ldr, crate::verify::image::flip::DEFAULT_PIXELS_PER_DEGREE)?;
     let model = if e.model == ShadingModelKind::Phong { "phong" } else { "physical" };
-    let stem = Path::new(&e.scene).file_stem().and_then(|s| s.to_str()).unwrap_or("scene");
-    let name = format!("mitsuba-{stem}.{model}");
+    let native = e.oracle.as_deref() == Some("native");
+    let name = format!("mitsuba-{}.{model}{}", e.name, if native { ".native" } else { "" });
     let pictures = [
         format!("{name}.rtdiff.png"),
         format!("{name}.mitsuba.png"),
@@ -184,6 +221,7 @@ fn compare_one(root: &Path, dir: &Path, images: &Path, m: &Manifest, e: &Manifes
     Ok(MitsubaRow {
         scene: e.scene.clone(),
         model: e.model,
+        native,
         deterministic: e.deterministic,
         reference_seeds: e.seeds.len(),
         rel_mse: metrics.rel_mse,

@@ -321,7 +321,7 @@ fn mitsuba_files(r: &MitsubaReport, e: &mut Emit) -> Result<Section> {
             .map(|row| {
                 vec![
                     row.scene.clone(),
-                    model_name(row.model).into(),
+                    format!("{}{}", model_name(row.model), if row.native { ", Mitsuba's own plugins" } else { "" }),
                     if row.deterministic {
                         "pixel centres".into()
                     } else {
@@ -335,7 +335,8 @@ fn mitsuba_files(r: &MitsubaReport, e: &mut Emit) -> Result<Section> {
             })
             .collect(),
         notes: vec![
-            "Each scene rendered by rtdiff in the reference's shading model and size (seed 0). Area-light scenes \
+            "Each scene rendered by rtdiff in the reference's shading model, size, feature switches, camera samples \
+             and depth (seed 0); \"Mitsuba's own plugins\": the native references (docs/oracles.md). Area-light scenes \
              are noisy in both renderers: their differences include both renderers' noise (tests/mitsuba_reference.rs \
              checks them statistically)."
                 .into(),
@@ -345,7 +346,12 @@ fn mitsuba_files(r: &MitsubaReport, e: &mut Emit) -> Result<Section> {
     for row in &r.rows {
         let img = |f: &str| format!("images/{f}");
         blocks.push(e.pictures(PictureRow {
-            title: format!("{} ({})", row.scene, model_name(row.model)),
+            title: format!(
+                "{} ({}{})",
+                row.scene,
+                model_name(row.model),
+                if row.native { ", Mitsuba's own plugins" } else { "" }
+            ),
             render_label: "rtdiff".into(),
             render: img(&row.pictures[0]),
             reference_label: r.mitsuba.clone(),

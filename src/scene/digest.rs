@@ -1,6 +1,6 @@
 //! A fingerprint of what a loaded scene actually renders: the float32
 //! triangles, shading normals and uvs, spheres, materials with their texture
-//! texels, lights and camera, exactly as the tracers and the integrator see
+//! texels and wrap mode, lights and camera, exactly as the tracers and the integrator see
 //! them (after mesh normalisation, transforms and texture decoding).
 //!
 //! A reference image made from a scene (reference/, issue 9) records this
@@ -53,7 +53,7 @@ pub fn traced_sha256(scene: &Scene) -> String {
         u32s(&mut h, &[m.model as u32]);
         match &m.kd_texture {
             Some(t) => {
-                u32s(&mut h, &[1, t.width, t.height]);
+                u32s(&mut h, &[1, t.width, t.height, m.wrap as u32]);
                 t.texels.iter().for_each(|&c| v3(&mut h, c));
             }
             None => u32s(&mut h, &[0]),

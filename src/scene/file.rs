@@ -12,6 +12,7 @@ use crate::features::{Features, Params};
 use crate::geometry::TriangleTest;
 use crate::light::{Light, ParallelogramLight, PointLight, SegmentLight};
 use crate::shading::ShadingModelKind;
+use crate::texture::WrapMode;
 
 /// A whole scene file.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
@@ -164,6 +165,8 @@ pub struct MaterialSpec {
     pub kd_texture: Option<String>,
     /// Read 8-bit textures as linear values instead of sRGB.
     pub texture_raw: bool,
+    /// How the texture is addressed outside uv [0, 1]: `repeat` (default), `mirror` or `clamp`.
+    pub texture_wrap: Option<WrapMode>,
     /// Shading model (default: the scene's).
     pub shading_model: Option<ShadingModelKind>,
 }

@@ -12,7 +12,7 @@ use crate::error::{Error, Result};
 use crate::material::Material;
 use crate::mesh::{MtlMaterial, TextureSource};
 use crate::shading::ShadingModelKind;
-use crate::texture::Texture;
+use crate::texture::{Texture, WrapMode};
 
 use super::SceneFile;
 
@@ -86,6 +86,7 @@ impl<'f> MaterialTable<'f> {
                 shininess: m.shininess.unwrap_or(1.0),
                 opacity: 1.0 - m.transparency.unwrap_or(0.0),
                 kd_texture,
+                wrap: m.texture_wrap.unwrap_or_default(),
                 model: m.shading_model.unwrap_or(file.shading_model),
             });
         }
@@ -123,6 +124,7 @@ impl<'f> MaterialTable<'f> {
             shininess: m.ns.unwrap_or(1.0),
             opacity: m.opacity.unwrap_or(1.0).clamp(0.0, 1.0),
             kd_texture,
+            wrap: if m.map_kd_clamp { WrapMode::Clamp } else { WrapMode::Repeat },
             model: self.model,
         });
         Ok(self.materials.len() as u32 - 1)

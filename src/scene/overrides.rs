@@ -19,6 +19,8 @@ pub struct Overrides {
     pub seed: Option<u64>,
     /// Feature switches `(name, on)`.
     pub features: Vec<(String, bool)>,
+    /// Recursion depth (`params.max_depth`).
+    pub max_depth: Option<u32>,
     /// Backend.
     pub backend: Option<Backend>,
     /// BVH builder.
@@ -37,6 +39,7 @@ impl Overrides {
         img.height = self.height.unwrap_or(img.height);
         img.spp = self.spp.unwrap_or(img.spp);
         img.seed = self.seed.unwrap_or(img.seed);
+        file.params.max_depth = self.max_depth.unwrap_or(file.params.max_depth);
         for (name, on) in &self.features {
             *file.features.get_mut(name).ok_or_else(|| {
                 Error::Invalid(format!(

@@ -275,7 +275,7 @@ impl Checker<'_> {
         self.number("params.bloom.threshold", p.bloom.threshold, -MAX_COLOR, MAX_COLOR)?;
         self.number("params.bloom.kernel_size", p.bloom.kernel_size, 1.0, limits::MAX_BLOOM_KERNEL)?;
         self.number("params.bloom.scale", p.bloom.scale, -MAX_COLOR, MAX_COLOR)?;
-        if let SpawnOffset::Fixed { epsilon } = p.ray_offset {
+        if let SpawnOffset::Fixed { epsilon } | SpawnOffset::ScaledNormal { epsilon } = p.ray_offset {
             self.number("params.ray_offset.epsilon", epsilon, 0.0, MAX_COORDINATE)?;
         }
         Ok(())
@@ -465,6 +465,16 @@ mod tests {
         assert!(m.contains("the scene: expected an object"), "{m}");
         // Vectors stay arrays.
         parse(r#"{ "camera": { "position": [0, 0, 3] } }"#).expect("vectors are arrays");
+    }
+
+    #[test]
+    fn texture_wrap_is_one_of_three_modes() {
+        let m = message(r#"{ "materials": { "floor": { "texture_wrap": "tile" } } }"#);
+        assert!(m.contains("materials.floor.texture_wrap: unknown variant `tile`"), "{m}");
+        for w in ["repeat", "mirror", "clamp"] {
+            let f = parse(&format!(r#"{{ "materials": {{ "floor": {{ "texture_wrap": "{w}" }} }} }}"#)).unwrap();
+            assert_eq!(f.materials["floor"].texture_wrap.unwrap().name(), w);
+        }
     }
 
     #[test]

@@ -40,13 +40,19 @@ pub struct Reference {
     pub width: u32,
     /// Image height.
     pub height: u32,
+    /// Made by Mitsuba's own emitters, BSDFs and integrators (else by the rtdiff_whitted plugin).
+    pub native: bool,
+    /// Camera samples per pixel the reference was exported (and is rendered) with, if not the scene's.
+    pub spp: Option<u32>,
+    /// Recursion depth the reference was exported (and is rendered) with, if not the scene's.
+    pub max_depth: Option<u32>,
 }
 
 impl Reference {
-    /// `scene.model`, as the tests print it.
+    /// `scene.model` (`scene.model.native` for a native reference), as the tests print it.
     pub fn name(&self) -> String {
         let m = if self.model == ShadingModelKind::Phong { "phong" } else { "physical" };
-        format!("{}.{m}", self.name)
+        format!("{}.{m}{}", self.name, if self.native { ".native" } else { "" })
     }
 }
 
@@ -89,8 +95,11 @@ pub fn manifest() -> Vec<Reference> {
                 image: dir.join(e["image"].as_str().unwrap()),
                 variance: e["variance"].as_str().map(|v| dir.join(v)),
                 traced: e["traced_sha256"].as_str().expect("manifest entry without traced_sha256").to_string(),
-                width: w,
-                height: h,
+                width: e["width"].as_u64().map_or(w, |v| v as u32),
+                height: e["height"].as_u64().map_or(h, |v| v as u32),
+                native: e["oracle"] == "native",
+                spp: e["spp"].as_u64().map(|v| v as u32),
+                max_depth: e["max_depth"].as_u64().map(|v| v as u32),
             }
         })
         .collect()
@@ -120,6 +129,8 @@ pub fn load(r: &Reference, seed: u64, tweak: &dyn Fn(&mut SceneFile)) -> Scene {
         width: Some(r.width),
         height: Some(r.height),
         seed: Some(seed),
+        spp: r.spp,
+        max_depth: r.max_depth,
         features: r.features.clone(),
         ..Default::default()
     };

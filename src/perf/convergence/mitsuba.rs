@@ -8,7 +8,7 @@ use indicatif::ProgressBar;
 use super::{ConvergenceOptions, ConvergencePoint, Curve, Feature, MITSUBA_SEED, Measure, MitsubaCurve, Why, load};
 use crate::error::Error;
 use crate::perf::mitsuba_python::{self, SweepJob};
-use crate::scene::export::mitsuba::export_mitsuba;
+use crate::scene::export::mitsuba::{OracleChoice, export_mitsuba};
 use crate::verify::image::read_image;
 
 /// Mitsuba's curve of `feature`, or why there is none (never an error: a
@@ -62,7 +62,7 @@ fn run(
         };
         let (scene, lights) = load(opts, feature, in_scene, MITSUBA_SEED)?;
         let scene_dir = dir.join(format!("n{n}"));
-        let export = export_mitsuba(&scene, &lights, &scene_dir)?;
+        let export = export_mitsuba(&scene, &lights, &scene_dir, OracleChoice::Plugin)?;
         if !export.warnings.is_empty() {
             return Err(Missing(Why::NoMapping, format!("no Mitsuba mapping yet: {}", export.warnings.join("; "))));
         }

@@ -2,6 +2,7 @@
 //! renderers see the same float32 triangles, textures, lights and camera.
 
 pub mod mitsuba;
+pub mod native;
 pub mod obj;
 
-pub use mitsuba::{ExportReport, export_mitsuba};
+pub use mitsuba::{ExportReport, Oracle, OracleChoice, export_mitsuba};

@@ -29,7 +29,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
+use statrs::distribution::{ContinuousCDF, FisherSnedecor, Normal, StudentsT};
 
 use crate::error::{Error, Result};
 use crate::film::Image;
@@ -302,6 +302,73 @@ pub fn welch_test(reference: &Moments, test: &Moments, opts: &WelchOptions) -> R
     })
 }
 
+/// What [`variance_test`] found.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct VarianceReport {
+    /// Pixel-channels tested (those with a non-zero variance on either side).
+    pub tests: u64,
+    /// Hypotheses rejected by Benjamini-Hochberg.
+    pub rejected: u64,
+    /// Smallest p-value.
+    pub min_p: f64,
+    /// Largest ratio of the two variances (the larger over the smaller) among the tested.
+    pub max_ratio: f64,
+    /// No hypothesis rejected.
+    pub passed: bool,
+}
+
+/// Two-sided p-value of the F-test of H0 "same variance" for one-sample variances `v1`, `v2`
+/// estimated from `n1`, `n2` values: `v1 / v2 ~ F(n1 - 1, n2 - 1)` for normal values.
+pub fn variance_ratio_p(v1: f64, n1: u32, v2: f64, n2: u32) -> f64 {
+    if v1 == v2 {
+        return 1.0;
+    }
+    if v1 <= 0.0 || v2 <= 0.0 {
+        return 0.0;
+    }
+    match FisherSnedecor::new(n1 as f64 - 1.0, n2 as f64 - 1.0) {
+        Ok(f) => {
+            let x = v1 / v2;
+            (2.0 * f.cdf(x).min(f.sf(x))).min(1.0)
+        }
+        Err(_) => f64::NAN,
+    }
+}
+
+/// Test whether `a` and `b` have the same per-pixel one-image variance: one F-test per
+/// pixel-channel ([`variance_ratio_p`]; pixel-channels with zero variance on both sides are
+/// deterministic and skipped), Benjamini-Hochberg over the family at rate `fdr`. The F-test
+/// assumes normally distributed per-image values (each image's pixel is a mean over many
+/// samples); it checks a reference's noise estimate, not its expected value (that is
+/// [`welch_test`]'s job).
+pub fn variance_test(a: &Moments, b: &Moments, fdr: f64) -> Result<VarianceReport> {
+    if (a.width, a.height) != (b.width, b.height) {
+        return Err(Error::Invalid(format!(
+            "image sizes differ: {}x{} and {}x{}",
+            a.width, a.height, b.width, b.height
+        )));
+    }
+    let mut p = Vec::new();
+    let mut max_ratio = 1f64;
+    for (va, vb) in a.variance.iter().zip(&b.variance) {
+        for c in 0..3 {
+            if va[c] > 0.0 || vb[c] > 0.0 {
+                p.push(variance_ratio_p(va[c], a.count, vb[c], b.count));
+                max_ratio = max_ratio.max(va[c].max(vb[c]) / va[c].min(vb[c]));
+            }
+        }
+    }
+    let cutoff = benjamini_hochberg(&p, fdr);
+    let rejected = p.iter().filter(|v| cutoff.is_some_and(|cut| **v <= cut)).count() as u64;
+    Ok(VarianceReport {
+        tests: p.len() as u64,
+        rejected,
+        min_p: p.iter().copied().fold(1.0, f64::min),
+        max_ratio,
+        passed: rejected == 0,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -439,5 +506,22 @@ mod tests {
         let bad = welch_test(&r, &t_bad, &WelchOptions::default()).unwrap();
         assert!(ok.passed && ok.exact_pixels == 2);
         assert!(!bad.passed && bad.exact_mismatches == 1 && bad.rejected_map == vec![false, true]);
+    }
+
+    #[test]
+    fn variance_test_accepts_equal_noise_and_rejects_doubled_noise() {
+        let mut rng = Pcg32::new(11, 5);
+        let (a, b) = (noisy(&mut rng, 64, 24, 24, 0.0, 0.05), noisy(&mut rng, 64, 24, 24, 0.0, 0.05));
+        let (ma, mb) = (Moments::from_images(&a).unwrap(), Moments::from_images(&b).unwrap());
+        let same = variance_test(&ma, &mb, 0.01).unwrap();
+        assert!(same.passed && same.tests == 24 * 24 * 3, "{same:?}");
+        let c = noisy(&mut rng, 64, 24, 24, 0.0, 0.1);
+        let wider = variance_test(&ma, &Moments::from_images(&c).unwrap(), 0.01).unwrap();
+        assert!(!wider.passed && wider.rejected > 1000, "{wider:?}");
+        // Closed form: equal variances give p = 1, a zero against a non-zero variance p = 0.
+        assert_eq!(variance_ratio_p(0.3, 10, 0.3, 20), 1.0);
+        assert_eq!(variance_ratio_p(0.0, 10, 0.3, 20), 0.0);
+        let p = variance_ratio_p(2.0, 64, 1.0, 64);
+        assert!(p > 0.0 && p < 0.01, "{p}");
     }
 }
