@@ -256,20 +256,7 @@ impl EmbreeScene {
     #[inline(always)]
     fn intersect(&self, r: &UserRay) -> Option<(f32, u32, Vec3)> {
         let mut rh = ffi::RTCRayHit {
-            ray: ffi::RTCRay {
-                org_x: r.o[0],
-                org_y: r.o[1],
-                org_z: r.o[2],
-                tnear: r.tnear,
-                dir_x: r.d[0],
-                dir_y: r.d[1],
-                dir_z: r.d[2],
-                time: 0.0,
-                tfar: r.tfar,
-                mask: u32::MAX,
-                id: 0,
-                flags: 0,
-            },
+            ray: rtc_ray(r),
             hit: ffi::RTCHit {
                 geomID: ffi::RTC_INVALID_GEOMETRY_ID,
                 instID: [ffi::RTC_INVALID_GEOMETRY_ID; ffi::RTC_MAX_INSTANCE_LEVEL_COUNT],
@@ -284,23 +271,29 @@ impl EmbreeScene {
 
     #[inline(always)]
     fn occluded(&self, r: &UserRay) -> bool {
-        let mut ray = ffi::RTCRay {
-            org_x: r.o[0],
-            org_y: r.o[1],
-            org_z: r.o[2],
-            tnear: r.tnear,
-            dir_x: r.d[0],
-            dir_y: r.d[1],
-            dir_z: r.d[2],
-            time: 0.0,
-            tfar: r.tfar,
-            mask: u32::MAX,
-            id: 0,
-            flags: 0,
-        };
+        let mut ray = rtc_ray(r);
         // SAFETY: committed scene, a 48-byte RTCRay, default arguments.
         unsafe { ffi::rtcOccluded1(self.scene, &mut ray, std::ptr::null_mut()) };
         ray.tfar == f32::NEG_INFINITY
+    }
+}
+
+/// The ray as Embree's `RTCRay`, every geometry accepted (mask all ones).
+#[inline(always)]
+fn rtc_ray(r: &UserRay) -> ffi::RTCRay {
+    ffi::RTCRay {
+        org_x: r.o[0],
+        org_y: r.o[1],
+        org_z: r.o[2],
+        tnear: r.tnear,
+        dir_x: r.d[0],
+        dir_y: r.d[1],
+        dir_z: r.d[2],
+        time: 0.0,
+        tfar: r.tfar,
+        mask: u32::MAX,
+        id: 0,
+        flags: 0,
     }
 }
 

@@ -14,7 +14,9 @@ fn race(dir: &std::path::Path, extra: &[&str]) -> (String, serde_json::Value) {
         let c = |bit: usize| if v >> bit & 1 == 1 { 1.0 } else { -1.0 };
         obj += &format!("v {} {} {}\n", c(0), c(1), c(2));
     }
-    for f in ["1 2 4", "1 4 3", "5 7 8", "5 8 6", "1 5 6", "1 6 2", "3 4 8", "3 8 7", "1 3 7", "1 7 5", "2 6 8", "2 8 4"] {
+    for f in
+        ["1 2 4", "1 4 3", "5 7 8", "5 8 6", "1 5 6", "1 6 2", "3 4 8", "3 8 7", "1 3 7", "1 7 5", "2 6 8", "2 8 4"]
+    {
         obj += &format!("f {f}\n");
     }
     std::fs::write(&mesh, obj).unwrap();
