@@ -340,16 +340,18 @@ impl RootBox {
     }
 }
 
-/// Whether ray `$ray` provably misses `$bvh`'s [`RootBox`], by the slab
-/// arithmetic of the walk's box test on four SSE lanes (a macro, so that it
-/// expands inside the AVX2 entry points with their instruction set).
+/// Whether the ray of origin `$o`, reciprocal direction `$inv` (both from
+/// `ray_sse!`) and interval start `$t_min` provably misses `$bvh`'s
+/// [`RootBox`], by the slab arithmetic of the walk's box test on four SSE
+/// lanes (a macro, so that it expands inside the AVX2 entry points with
+/// their instruction set).
 ///
 /// Exactness. Each axis's entry and exit distances are computed as the
 /// walk computes them for a node's lanes (`(plane - o) * inv` for the near
 /// plane, `(plane - o) * inv_far` for the far one, the same roundings, the
 /// planes picked by the sign of `inv`), so each is a valid conservative bound
-/// of the exact slab, and `t_min` and `cull_bound(t_max)` bound the ray's
-/// interval as in the walk. The ray is declared a miss only when the largest
+/// of the exact slab, and `t_min` bounds the entries as in the walk (the
+/// ray's `t_max` is not used, which only keeps more rays). The ray is declared a miss only when the largest
 /// entry exceeds the smallest exit in an ordered comparison: `maxps` and
 /// `minps` either drop a NaN slab (a zero direction component with the
 /// origin on the plane, which bounds nothing) or carry it to the comparison,
@@ -610,12 +612,11 @@ macro_rules! closest {
                 // SAFETY: `lr` was made at the node whose leaf lane led here
                 // (every leaf is reached through an entered leaf lane).
                 let lr = unsafe { lr.assume_init_ref() };
-                let tree = $self;
                 if cur.count & ENTRY_LEAF != 0 {
-                    tree.prims.intersect_leaf::<$k>(cur.child, n, &mut r, &lr.wr(), &mut best)
+                    $self.prims.intersect_leaf::<$k>(cur.child, n, &mut r, &lr.wr(), &mut best)
                 } else {
                     // SAFETY: a packet leaf lane of one of this tree's nodes.
-                    unsafe { tree.packets_closest::<$k>(cur.child, n, &mut r, lr, &mut best, $simd) }
+                    unsafe { $self.packets_closest::<$k>(cur.child, n, &mut r, lr, &mut best, $simd) }
                 }
             } {
                 $counts.closer();
