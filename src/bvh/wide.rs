@@ -307,6 +307,133 @@ macro_rules! portable_pre {
     };
 }
 
+/// The box around everything in a tree (the union of the root node's lanes),
+/// kept beside the nodes for the closest-hit entry's early out
+/// (`misses_root!`): a ray that provably misses it returns at once, before
+/// the walk's per-ray set-up (the eight-lane broadcasts, the stack frame)
+/// and the root node's eight-lane test. Lane 3 is padding that never
+/// restricts a ray (`-inf` below, `+inf` above).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(16))]
+struct RootBox {
+    lo: [f32; 4],
+    hi: [f32; 4],
+}
+
+impl RootBox {
+    /// The box of an empty tree: inverted, so that no ray enters it.
+    const EMPTY: RootBox = RootBox {
+        lo: [f32::INFINITY, f32::INFINITY, f32::INFINITY, f32::NEG_INFINITY],
+        hi: [f32::NEG_INFINITY, f32::NEG_INFINITY, f32::NEG_INFINITY, f32::INFINITY],
+    };
+
+    /// The union of `root`'s lanes (empty lanes hold inverted boxes and add nothing).
+    fn of(root: &WideNode) -> RootBox {
+        let mut b = Self::EMPTY;
+        for l in 0..WIDTH {
+            for a in 0..3 {
+                b.lo[a] = b.lo[a].min(root.b[a][l]);
+                b.hi[a] = b.hi[a].max(root.b[3 + a][l]);
+            }
+        }
+        b
+    }
+}
+
+/// Whether the ray of origin `$o`, reciprocal direction `$inv` (both from
+/// `ray_sse!`) and interval start `$t_min` provably misses `$bvh`'s
+/// [`RootBox`], by the slab arithmetic of the walk's box test on four SSE
+/// lanes (a macro, so that it expands inside the AVX2 entry points with
+/// their instruction set).
+///
+/// Exactness. Each axis's entry and exit distances are computed as the
+/// walk computes them for a node's lanes (`(plane - o) * inv` for the near
+/// plane, `(plane - o) * inv_far` for the far one, the same roundings, the
+/// planes picked by the sign of `inv`), so each is a valid conservative bound
+/// of the exact slab, and `t_min` bounds the entries as in the walk (the
+/// ray's `t_max` is not used, which only keeps more rays). The ray is declared a miss only when the largest
+/// entry exceeds the smallest exit in an ordered comparison: `maxps` and
+/// `minps` either drop a NaN slab (a zero direction component with the
+/// origin on the plane, which bounds nothing) or carry it to the comparison,
+/// which is then false. So a miss is declared only when some valid entry
+/// bound exceeds some valid exit bound, which no ray that meets the box (and
+/// so no ray that meets a triangle of the tree in its interval) can show.
+/// Every box of the tree lies inside the root box, so the walk would have
+/// entered nothing either: the answer (none) is the walk's, bit for bit.
+#[cfg(target_arch = "x86_64")]
+macro_rules! misses_root {
+    ($bvh:expr, $o:expr, $inv:expr, $t_min:expr) => {{
+        use std::arch::x86_64::*;
+        let (b, o, inv, t_min): (&RootBox, __m128, __m128, f32) = (&$bvh.root_box, $o, $inv, $t_min);
+        let inv_far = _mm_mul_ps(inv, _mm_set1_ps(far_scale()));
+        // SAFETY: `RootBox` is 16-byte aligned and its rows are four floats.
+        let (lo, hi) = unsafe { (_mm_load_ps(b.lo.as_ptr()), _mm_load_ps(b.hi.as_ptr())) };
+        let (a, c) = (_mm_sub_ps(lo, o), _mm_sub_ps(hi, o));
+        // Near: the low plane where `inv` is positive, the high one where it
+        // is negative (its sign bit picks, as `WidePre::new` picks rows).
+        let near = _mm_blendv_ps(_mm_mul_ps(a, inv), _mm_mul_ps(c, inv), inv);
+        let far = _mm_blendv_ps(_mm_mul_ps(c, inv_far), _mm_mul_ps(a, inv_far), inv);
+        let near = _mm_max_ps(near, _mm_movehl_ps(near, near));
+        let near = _mm_max_ss(_mm_max_ss(near, _mm_movehdup_ps(near)), _mm_set_ss(t_min));
+        let far = _mm_min_ps(far, _mm_movehl_ps(far, far));
+        let far = _mm_min_ss(far, _mm_movehdup_ps(far));
+        // (The ray's `t_max` is left to the walk: a miss proven without it
+        // is a miss all the same.)
+        _mm_comigt_ss(near, far) != 0
+    }};
+}
+
+/// A ray's origin and direction on four SSE lanes each, `[ox, oy, oz, dx]`
+/// and `[dx, dy, dz, t_min]`, and its `t_max`, read field by field.
+///
+/// A caller that makes each ray just before the call (a camera, a shadow ray
+/// spawned at a hit: what users and rtdiff's renderer do) has written it with
+/// stores of a field or two each, which have not reached the cache when the
+/// call begins. A load wider than those stores, or straddling two of them,
+/// cannot take its value from them and waits until they have (a failed
+/// store-to-load forward, some 15-20 cycles: as long as a whole ray that
+/// misses the root box). The entry therefore reads each field with a load
+/// of its own (volatile, so that the optimiser does not merge them into
+/// wider ones); the walk's wider loads come much later.
+#[cfg(target_arch = "x86_64")]
+macro_rules! ray_sse {
+    ($ray:expr) => {{
+        use std::arch::x86_64::*;
+        let p = std::ptr::from_ref::<Ray>($ray).cast::<f32>();
+        // SAFETY: the ray is eight aligned `f32`s (checked below).
+        let f = |k: usize| unsafe { std::ptr::read_volatile(p.add(k)) };
+        let dx = f(3);
+        (_mm_setr_ps(f(0), f(1), f(2), dx), _mm_setr_ps(dx, f(4), f(5), f(6)), f(7))
+    }};
+}
+
+/// [`Ray::is_traceable`] of the ray `ray_sse!` read (`$o`, `$d`, `$t_max`),
+/// the same answer for every ray: the six coordinates' exponents from two
+/// four-lane compares, a zero direction from another (`-0` equals `0`; a
+/// subnormal does not), the interval from a scalar one.
+#[cfg(target_arch = "x86_64")]
+macro_rules! traceable_sse {
+    ($o:expr, $d:expr, $t_max:expr) => {{
+        use std::arch::x86_64::*;
+        let (o, d, t_max): (__m128, __m128, f32) = ($o, $d, $t_max);
+        let e = _mm_set1_epi32(0x7f80_0000);
+        let inf =
+            |v: __m128| _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(_mm_castps_si128(v), e), e)));
+        let nonfinite = inf(o) | (inf(d) & 0b111);
+        let zero = _mm_movemask_ps(_mm_cmpeq_ps(d, _mm_setzero_ps())) & 0b111;
+        (nonfinite == 0) & (zero != 0b111) & (_mm_cvtss_f32(_mm_shuffle_ps::<0b11>(d, d)) <= t_max)
+    }};
+}
+
+/// `ray_sse!` reads a ray as eight consecutive floats.
+const _: () = assert!(
+    std::mem::offset_of!(Ray, origin) == 0
+        && std::mem::offset_of!(Ray, dir) == 12
+        && std::mem::offset_of!(Ray, t_min) == 24
+        && std::mem::offset_of!(Ray, t_max) == 28
+        && std::mem::size_of::<Ray>() == 32
+);
+
 /// A pending child: entry distance, node or first primitive, primitive count (0 = inner node).
 #[derive(Clone, Copy)]
 struct Entry {
@@ -319,14 +446,16 @@ struct Entry {
 /// generic over the box test; the closest hit before
 /// [`LeafPrims::finish`] (a sphere's `(u, v)` not yet made).
 macro_rules! closest {
-    ($self:ident, $ray:ident, $start:expr, $k:ty, $pre:ident, $box8:ident, $simd:expr, $counts:expr, $stack:expr, $pf:expr) => {{
+    ($self:ident, $ray:ident, $start:expr, $k:ty, $q:expr, $box8:ident, $simd:expr, $counts:expr, $stack:expr, $pf:expr) => {{
         debug_assert!($ray.is_traceable(), "the walks take traceable rays only");
-        let pre = WidePre::new($ray);
-        let q = $pre!(&pre);
+        // The ray's box-test data (`WidePre` or `Avx2Pre`), made by the caller.
+        let q = $q;
         // The shear of the triangle test, made at the first node where the
         // ray enters a leaf's box (see `shear`): every leaf visited was
         // entered so before.
-        let mut lr = LeafRay::UNUSED;
+        // (Uninitialised until then: a copy of `LeafRay::UNUSED` cost every
+        // ray four instructions.)
+        let mut lr = MaybeUninit::<LeafRay>::uninit();
         let mut made = false;
         let mut r = *$ray;
         let mut best: Option<Hit> = None;
@@ -349,7 +478,7 @@ macro_rules! closest {
                 // take no other (`Kernels::closest`).
                 let node = unsafe { nodes.get_unchecked(cur.child as usize) };
                 $counts.node(cur.child);
-                let mut mask = $box8!(node, &q, cull, &mut near);
+                let mut mask = $box8!(node, q, cull, &mut near);
                 if mask != 0 {
                     if !made && mask & !node.inner_lanes() != 0 {
                         made = true;
@@ -374,7 +503,7 @@ macro_rules! closest {
                         // shadow ray passes on to a leaf: there the hoisted
                         // form costs nothing and the barrier measured 1.5%
                         // more instructions on suzanne.)
-                        lr = shear::<$k>(std::hint::black_box($ray));
+                        lr = MaybeUninit::new(shear::<$k>(std::hint::black_box($ray)));
                     }
                     if $pf {
                         $self.prefetch_children(node, mask);
@@ -479,12 +608,15 @@ macro_rules! closest {
             } else if {
                 let n = cur.count & !ENTRY_LEAF;
                 $counts.leaf(cur.child, n);
-                debug_assert!(made || !<$k as TriangleKernel>::WATERTIGHT, "a leaf before its shear");
+                debug_assert!(made, "a leaf before its shear");
+                // SAFETY: `lr` was made at the node whose leaf lane led here
+                // (every leaf is reached through an entered leaf lane).
+                let lr = unsafe { lr.assume_init_ref() };
                 if cur.count & ENTRY_LEAF != 0 {
                     $self.prims.intersect_leaf::<$k>(cur.child, n, &mut r, &lr.wr(), &mut best)
                 } else {
                     // SAFETY: a packet leaf lane of one of this tree's nodes.
-                    unsafe { $self.packets_closest::<$k>(cur.child, n, &mut r, &lr, &mut best, $simd) }
+                    unsafe { $self.packets_closest::<$k>(cur.child, n, &mut r, lr, &mut best, $simd) }
                 }
             } {
                 $counts.closer();
@@ -510,18 +642,21 @@ macro_rules! closest {
 /// The SIMD closest-hit walk from the root as method `$name` of [`WideBvh`],
 /// compiled for the target features `$features` (one definition for every
 /// instruction set the walk is compiled for, [`WalkIsa`]). Its callers
-/// guarantee the features and a traceable ray ([`ClosestFn`]).
+/// guarantee the features and a traceable ray ([`ClosestFn`]). Never
+/// inlined into the entry points, whose early outs (`misses_root!`) then
+/// need none of its stack frame and per-ray set-up.
 macro_rules! simd_closest_walk {
     ($(#[$doc:meta])* $name:ident, $features:literal) => {
         $(#[$doc])*
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = $features)]
+        #[inline(never)]
         fn $name<K: TriangleKernel, C: Count, const S: usize, const P: bool>(
             &self,
             ray: &Ray,
             counts: &mut C,
         ) -> Option<Hit> {
-            self.prims.finish(closest!(self, ray, 0, K, avx2_pre, box8_avx2, true, counts, S, P), ray)
+            self.prims.finish(closest!(self, ray, 0, K, &avx2_pre!(&WidePre::new(ray)), box8_avx2, true, counts, S, P), ray)
         }
     };
 }
@@ -654,9 +789,11 @@ macro_rules! any_hit {
 }
 
 /// A closest-hit entry point of one configuration. Unsafe to call: the
-/// CPU must run its instruction set and the ray must be [`Ray::is_traceable`]
-/// (the walks follow the tree's links without bounds checks, see
-/// `check_node` in `wide.rs`); [`Kernels`] checks both.
+/// CPU must run its instruction set ([`Kernels`] makes sure of it). It
+/// takes any ray, and answers none for one that is not
+/// [`Ray::is_traceable`] (the walks behind it take traceable rays only: they
+/// follow the tree's links without bounds checks, see `check_node` in
+/// `wide.rs`).
 pub type ClosestFn = unsafe fn(&WideBvh, &Ray) -> Option<Hit>;
 /// An any-hit entry point of one configuration (the contract of [`ClosestFn`]).
 pub type AnyFn = unsafe fn(&WideBvh, &Ray) -> bool;
@@ -689,11 +826,8 @@ impl Kernels {
     /// traceable rays only: see `check_node` in `wide.rs`).
     #[inline(always)]
     pub fn closest(&self, bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
-        if !ray.is_traceable() {
-            return None;
-        }
         // SAFETY: `WideBvh::kernels` only hands out AVX2 (AVX-512) entry points when the CPU has AVX2
-        // (AVX2, AVX-512F and AVX-512VL); the ray is traceable.
+        // (AVX2, AVX-512F and AVX-512VL); the entry points check the ray.
         unsafe { (self.closest)(bvh, ray) }
     }
 
@@ -832,6 +966,9 @@ pub struct WideBvh {
     /// The triangles of every other leaf in 4-wide packets (None when there are no triangles).
     pub(super) packets: Option<TriPackets>,
     isa: WalkIsa,
+    /// The union of the root's lanes: the closest-hit entry's early out
+    /// ([`RootBox`]).
+    root_box: RootBox,
     /// Wide nodes on the longest root-to-leaf path (sizes the traversal stack).
     levels: usize,
     /// The tree outgrows a core's L2 cache ([`PREFETCH_ALL_BYTES`]): every
@@ -973,7 +1110,8 @@ impl WideBvh {
     /// prefetch choice.
     fn finish(nodes: Vec<WideNode>, levels: usize, prims: LeafPrims, packets: Option<TriPackets>) -> Self {
         debug_assert_eq!(levels, levels_of(&nodes), "the collapse counted the levels wrong");
-        let mut bvh = Self { levels, nodes, prims, packets, isa: detect_isa(), prefetch_all: false };
+        let root_box = nodes.first().map_or(RootBox::EMPTY, RootBox::of);
+        let mut bvh = Self { levels, nodes, prims, packets, isa: detect_isa(), root_box, prefetch_all: false };
         bvh.prefetch_all = bvh.bytes() > PREFETCH_ALL_BYTES;
         bvh
     }
@@ -1333,8 +1471,10 @@ impl WideBvh {
         ray: &Ray,
         counts: &mut C,
     ) -> Option<Hit> {
-        self.prims
-            .finish(closest!(self, ray, 0, K, portable_pre, box8_portable, false, counts, S, self.prefetch_all), ray)
+        self.prims.finish(
+            closest!(self, ray, 0, K, &WidePre::new(ray), box8_portable, false, counts, S, self.prefetch_all),
+            ray,
+        )
     }
 
     /// The portable any-hit walk.
@@ -1369,7 +1509,7 @@ impl WideBvh {
         ray: &Ray,
         start: u32,
     ) -> Option<Hit> {
-        closest!(self, ray, start, K, avx2_pre, box8_avx2, true, &mut (), S, P)
+        closest!(self, ray, start, K, &avx2_pre!(&WidePre::new(ray)), box8_avx2, true, &mut (), S, P)
     }
 
     /// The AVX2 any-hit walk from the root (its callers guarantee AVX2 and a traceable ray).
@@ -1397,9 +1537,9 @@ impl WideBvh {
     }
 }
 
-/// The portable closest-hit entry point (the ray is traceable: [`ClosestFn`]).
+/// The portable closest-hit entry point ([`ClosestFn`]).
 unsafe fn closest_portable<K: TriangleKernel, const S: usize>(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
-    if bvh.nodes.is_empty() {
+    if !ray.is_traceable() || bvh.nodes.is_empty() {
         return None;
     }
     // SAFETY: the caller guarantees a traceable ray.
@@ -1415,25 +1555,51 @@ unsafe fn any_portable<K: TriangleKernel, const S: usize>(bvh: &WideBvh, ray: &R
     unsafe { bvh.any_portable_impl::<K, (), S>(ray, &mut ()) }
 }
 
-/// The AVX2 closest-hit entry point (only called when the CPU has AVX2, with a traceable ray).
+/// The closest-hit entry points' work before the walk `$walk` (a macro, so
+/// that it expands inside each entry point with its instruction set): the
+/// ray read field by field (`ray_sse!`), none for a ray that is not
+/// traceable (`traceable_sse!`) or an empty tree, and the root box's early
+/// out (`misses_root!`) for a ray whose origin lies outside the box (one
+/// that starts inside it cannot miss it: the test, its division included,
+/// is skipped for the rays that start in the scene, which is most of them
+/// but camera rays).
 #[cfg(target_arch = "x86_64")]
+macro_rules! closest_entry {
+    ($bvh:ident, $ray:ident, $walk:ident) => {{
+        use std::arch::x86_64::*;
+        let (o, d, t_max) = ray_sse!($ray);
+        if !traceable_sse!(o, d, t_max) || $bvh.nodes.is_empty() {
+            return None;
+        }
+        let b = &$bvh.root_box;
+        // SAFETY: `RootBox` is 16-byte aligned and its rows are four floats.
+        let (lo, hi) = unsafe { (_mm_load_ps(b.lo.as_ptr()), _mm_load_ps(b.hi.as_ptr())) };
+        // (Lane 3, `-inf <= dx <= +inf`, is inside for every traceable ray.)
+        let inside = _mm_movemask_ps(_mm_and_ps(_mm_cmple_ps(lo, o), _mm_cmple_ps(o, hi))) == 0b1111;
+        if !inside
+            && misses_root!($bvh, o, _mm_div_ps(_mm_set1_ps(1.0), d), _mm_cvtss_f32(_mm_shuffle_ps::<0b11>(d, d)))
+        {
+            return None;
+        }
+        // (The walk's contract, a traceable ray, is checked above.)
+        $bvh.$walk::<K, (), S, P>($ray, &mut ())
+    }};
+}
+
+/// The AVX2 closest-hit entry point (only called when the CPU has AVX2;
+/// `closest_entry!`, then the walk).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
 unsafe fn closest_avx2<K: TriangleKernel, const S: usize, const P: bool>(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
-    if bvh.nodes.is_empty() {
-        return None;
-    }
-    // SAFETY: the caller guarantees AVX2 (`WideBvh::kernels`) and a traceable ray.
-    unsafe { bvh.closest_avx2_impl::<K, (), S, P>(ray, &mut ()) }
+    closest_entry!(bvh, ray, closest_avx2_impl)
 }
 
 /// The AVX-512 closest-hit entry point (only called when the CPU has AVX2,
-/// AVX-512F and AVX-512VL, with a traceable ray).
+/// AVX-512F and AVX-512VL), as [`closest_avx2`].
 #[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,avx512f,avx512vl")]
 unsafe fn closest_avx512<K: TriangleKernel, const S: usize, const P: bool>(bvh: &WideBvh, ray: &Ray) -> Option<Hit> {
-    if bvh.nodes.is_empty() {
-        return None;
-    }
-    // SAFETY: the caller guarantees AVX2, AVX-512F and AVX-512VL (`WideBvh::kernels`) and a traceable ray.
-    unsafe { bvh.closest_avx512_impl::<K, (), S, P>(ray, &mut ()) }
+    closest_entry!(bvh, ray, closest_avx512_impl)
 }
 
 /// The AVX2 any-hit entry point (only called when the CPU has AVX2, with a traceable ray).
@@ -1701,7 +1867,10 @@ mod tests {
             Ray::new(Vec3::splat(0.5), Vec3::new(nan, 0.0, 0.0)),
             Ray::new(Vec3::new(f32::INFINITY, 0.5, 0.5), -Vec3::X),
             Ray::new(Vec3::splat(0.5), Vec3::ZERO),
+            Ray::new(Vec3::splat(0.5), Vec3::splat(-0.0)),
+            Ray::new(Vec3::splat(0.5), Vec3::new(0.0, f32::NEG_INFINITY, 0.0)),
             Ray { t_min: 1.0, t_max: 0.5, ..Ray::new(Vec3::splat(-1.0), Vec3::ONE) },
+            Ray { t_min: f32::NAN, ..Ray::new(Vec3::splat(-1.0), Vec3::ONE) },
         ];
         for isa in WalkIsa::supported() {
             let mut w = w.clone();
@@ -1740,6 +1909,85 @@ mod tests {
             .flat_map(|d| (0..50).map(move |k| Ray::new(Vec3::splat(0.02 * k as f32) - d, d)))
             .collect();
         assert_brute_force_answers(&prims, &w, &axis_rays, 30);
+    }
+
+    /// The closest-hit entry's early out at the root box (`misses_root!`)
+    /// changes no answer: on a mesh with triangles in the planes of its own
+    /// bounding box (a unit cube's faces around a soup), rays that start on
+    /// the box's faces, edges and corners or in their planes outside the
+    /// box, with direction components of `+0` and `-0` (slabs that are NaN
+    /// where the origin lies on the plane), rays from outside towards and
+    /// away from the box, and rays whose interval ends before the box or
+    /// starts after it give the brute-force answers bit for bit on every
+    /// walk. The root box is the union of the root's lanes.
+    #[test]
+    fn the_root_box_early_out_keeps_the_answers() {
+        let mut prims = soup(600, 21);
+        let c = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+        let quads = [
+            [c(0., 0., 0.), c(1., 0., 0.), c(1., 1., 0.), c(0., 1., 0.)],
+            [c(0., 0., 1.05), c(1., 0., 1.05), c(1., 1., 1.05), c(0., 1., 1.05)],
+            [c(0., 0., 0.), c(0., 1., 0.), c(0., 1., 1.05), c(0., 0., 1.05)],
+            [c(1., 0., 0.), c(1., 1., 0.), c(1., 1., 1.05), c(1., 0., 1.05)],
+            [c(0., 0., 0.), c(1., 0., 0.), c(1., 0., 1.05), c(0., 0., 1.05)],
+            [c(0., 1., 0.), c(1., 1., 0.), c(1., 1., 1.05), c(0., 1., 1.05)],
+        ];
+        for q in quads {
+            prims.triangles.push(Triangle { v: [q[0], q[1], q[2]] });
+            prims.triangles.push(Triangle { v: [q[0], q[2], q[3]] });
+        }
+        let prims = std::sync::Arc::new(prims);
+        let w = super::super::build_wide(&prims, &AccelConfig::default());
+        let b = w.root_box;
+        let (lo, hi) = (Vec3::from_slice(&b.lo[..3]), Vec3::from_slice(&b.hi[..3]));
+        assert_eq!((lo, hi), (prims.world_bounds().min, prims.world_bounds().max), "the root box is the scene's");
+        assert_eq!((b.lo[3], b.hi[3]), (f32::NEG_INFINITY, f32::INFINITY));
+        let mut rng = Pcg32::new(5, 5);
+        let mut rays = Vec::new();
+        // Coordinates on the box's planes, just inside and outside them, and beyond.
+        let coord = |a: usize, k: u32| {
+            let (l, h) = (lo[a], hi[a]);
+            [l, h, l.next_down(), h.next_up(), l.next_up(), h.next_down(), 0.5 * (l + h), l - 0.5, h + 0.5][k as usize]
+        };
+        let comp = [0.0f32, -0.0, 1.0, -1.0, 0.37, -0.81];
+        for _ in 0..6000 {
+            let o = Vec3::new(coord(0, rng.below(9)), coord(1, rng.below(9)), coord(2, rng.below(9)));
+            let d = Vec3::new(comp[rng.below(6) as usize], comp[rng.below(6) as usize], comp[rng.below(6) as usize]);
+            if d.abs().max_element() == 0.0 {
+                continue;
+            }
+            let r = match rng.below(3) {
+                0 => Ray::new(o, d),
+                // An interval that ends before the box or starts after it (or neither).
+                1 => Ray::with_range(o, d, 0.0, rng.next_f32() * 0.6),
+                _ => Ray::with_range(o, d, 0.4 + rng.next_f32(), f32::INFINITY),
+            };
+            rays.push(r);
+        }
+        // The watertight test's answers are the brute force's; the
+        // Moller-Trumbore test's may lie outside every box by a rounding
+        // (a ray one subnormal beside a cube face "hits" its corner), which
+        // no culling walk finds: for both tests, the entry point (with its
+        // early out) answers as the walk from the root without it.
+        let bits = |h: Option<Hit>| h.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()));
+        let brute = crate::accel::brute::BruteForce::new(prims.clone(), TriangleTest::Watertight);
+        for isa in WalkIsa::supported() {
+            let mut w = w.clone();
+            assert!(w.set_isa(isa));
+            for test in [TriangleTest::Watertight, TriangleTest::MollerTrumbore] {
+                let k = w.kernels(test);
+                let mut hits = 0;
+                for (i, r) in rays.iter().enumerate() {
+                    let got = k.closest(&w, r);
+                    assert_eq!(bits(got), bits(w.intersect_counting(r, test, &mut ())), "{test:?} {isa:?} ray {i}");
+                    if test == TriangleTest::Watertight {
+                        assert_eq!(bits(got), bits(crate::accel::Tracer::intersect(&brute, r)), "{isa:?} ray {i}");
+                    }
+                    hits += usize::from(got.is_some());
+                }
+                assert!(hits > 300, "{test:?} {isa:?}: only {hits} of {} rays hit", rays.len());
+            }
+        }
     }
 
     /// The deep-tree stack (chosen for trees of more than 27 levels) gives

@@ -75,6 +75,23 @@ impl Device {
     /// NUL-terminated; an interior NUL or a configuration Embree rejects is
     /// an error.
     pub fn new(config: &str) -> Result<Self> {
+        let dev = Self::unmonitored(config)?;
+        // SAFETY: live device; the payload outlives the device (see `count_memory`).
+        unsafe {
+            ffi::rtcSetDeviceMemoryMonitorFunction(
+                dev.raw,
+                Some(count_memory),
+                Arc::as_ptr(&dev.memory).cast_mut().cast(),
+            );
+        }
+        dev.check("registering the memory monitor")?;
+        Ok(dev)
+    }
+
+    /// [`Device::new`] without the memory monitor, as Embree's users make a
+    /// device (timing: the monitor is a call per allocation of the build);
+    /// [`Device::memory_bytes`] then stays 0.
+    pub fn unmonitored(config: &str) -> Result<Self> {
         let c = CString::new(config)
             .map_err(|_| Error::Invalid(format!("Embree device config {config:?} contains a NUL byte")))?;
         // SAFETY: `c` is a valid NUL-terminated string that outlives the call.
@@ -85,11 +102,6 @@ impl Device {
         }
         let dev = Self { raw, memory: Arc::new(AtomicI64::new(0)) };
         dev.check(&format!("creating a device with config {config:?}"))?;
-        // SAFETY: live device; the payload outlives the device (see `count_memory`).
-        unsafe {
-            ffi::rtcSetDeviceMemoryMonitorFunction(raw, Some(count_memory), Arc::as_ptr(&dev.memory).cast_mut().cast());
-        }
-        dev.check("registering the memory monitor")?;
         Ok(dev)
     }
 

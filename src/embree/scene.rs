@@ -76,7 +76,56 @@ impl Scene {
         if nt > (u32::MAX / 3) as usize || ns >= u32::MAX as usize {
             return Err(Error::Invalid(format!("too many primitives for Embree ({nt} triangles, {ns} spheres)")));
         }
+        let mut scene = Self::empty(device, quality, mode)?;
         let start = device.memory_bytes();
+        if nt > 0 {
+            scene.attach_triangles(prims)?;
+        }
+        if ns > 0 {
+            scene.attach_spheres(prims)?;
+        }
+        scene.commit(start)?;
+        Ok(scene)
+    }
+
+    /// A scene of one indexed triangle mesh (geometry 0), as Embree's users
+    /// hand it over: `positions` once each and three indices per triangle
+    /// (primitive id = triangle index), built with `quality` and the flags
+    /// of `mode`. Spheres have no indexed form here: use [`Scene::with_mode`].
+    pub fn indexed(
+        device: &Device,
+        positions: &[glam::Vec3],
+        indices: &[[u32; 3]],
+        quality: EmbreeQuality,
+        mode: EmbreeMode,
+    ) -> Result<Self> {
+        if indices.len() > u32::MAX as usize || positions.len() > u32::MAX as usize {
+            return Err(Error::Invalid(format!("too many triangles for Embree ({})", indices.len())));
+        }
+        if let Some(t) = indices.iter().find(|t| t.iter().any(|&i| i as usize >= positions.len())) {
+            return Err(Error::Invalid(format!("triangle {t:?} names a vertex beyond the {} given", positions.len())));
+        }
+        let mut scene = Self::empty(device, quality, mode)?;
+        let start = device.memory_bytes();
+        if !indices.is_empty() {
+            let g = scene.new_geometry(ffi::RTC_GEOMETRY_TYPE_TRIANGLE)?;
+            let vb = scene.new_buffer(&g, ffi::RTC_BUFFER_TYPE_VERTEX, ffi::RTC_FORMAT_FLOAT3, 12, positions.len())?;
+            // SAFETY: Embree returned a buffer of `positions.len()` items of 12 bytes (f32 x 3).
+            let verts = unsafe { std::slice::from_raw_parts_mut(vb.cast::<[f32; 3]>(), positions.len()) };
+            for (v, p) in verts.iter_mut().zip(positions) {
+                *v = p.to_array();
+            }
+            let ib = scene.new_buffer(&g, ffi::RTC_BUFFER_TYPE_INDEX, ffi::RTC_FORMAT_UINT3, 12, indices.len())?;
+            // SAFETY: as above, `indices.len()` items of 3 x u32.
+            unsafe { std::slice::from_raw_parts_mut(ib.cast::<[u32; 3]>(), indices.len()) }.copy_from_slice(indices);
+            scene.commit_and_attach(g, TRIANGLE_GEOM_ID)?;
+        }
+        scene.commit(start)?;
+        Ok(scene)
+    }
+
+    /// A new scene with `quality` and the flags of `mode`, nothing attached.
+    fn empty(device: &Device, quality: EmbreeQuality, mode: EmbreeMode) -> Result<Self> {
         // SAFETY: `device.raw()` is a live device.
         let raw = unsafe { ffi::rtcNewScene(device.raw()) };
         device.check("creating a scene")?;
@@ -84,7 +133,7 @@ impl Scene {
             return Err(Error::Invalid("Embree: rtcNewScene returned NULL".into()));
         }
         // Keep our own reference to the device for error checks.
-        let mut scene =
+        let scene =
             Self { raw, device: device.clone(), quality: quality_code(quality), memory: SceneMemory::default() };
         // SAFETY: `raw` is a live, uncommitted scene; flag and quality are valid enum values.
         unsafe {
@@ -96,18 +145,19 @@ impl Scene {
             ffi::rtcSetSceneBuildQuality(raw, quality_code(quality));
         }
         device.check("setting scene flags and build quality")?;
-        if nt > 0 {
-            scene.attach_triangles(prims)?;
-        }
-        if ns > 0 {
-            scene.attach_spheres(prims)?;
-        }
-        let attached = device.memory_bytes();
-        // SAFETY: `raw` is a live scene whose geometries are committed.
-        unsafe { ffi::rtcCommitScene(raw) };
-        device.check("committing the scene (BVH build)")?;
-        scene.memory = SceneMemory { geometry_bytes: attached - start, bvh_bytes: device.memory_bytes() - attached };
         Ok(scene)
+    }
+
+    /// Commit (build) the scene whose geometries were attached after the
+    /// device held `start` bytes, and record what each part took.
+    fn commit(&mut self, start: i64) -> Result<()> {
+        let attached = self.device.memory_bytes();
+        // SAFETY: `raw` is a live scene whose geometries are committed.
+        unsafe { ffi::rtcCommitScene(self.raw) };
+        self.device.check("committing the scene (BVH build)")?;
+        self.memory =
+            SceneMemory { geometry_bytes: attached - start, bvh_bytes: self.device.memory_bytes() - attached };
+        Ok(())
     }
 
     fn new_geometry(&self, kind: i32) -> Result<GeomGuard> {

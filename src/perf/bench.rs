@@ -173,7 +173,31 @@ impl RaySets {
     /// incoherent rays, and shadow rays from the primary hits of `reference`
     /// towards [`SHADOW_LIGHTS`] (rows `q * size / 4 ..` towards light `q`).
     pub fn new(prims: &Arc<Primitives>, size: u32, incoherent: usize, reference: &dyn Tracer) -> Self {
-        let primary = Camera::default_view(size, size).pixel_centre_rays();
+        Self::with_camera(prims, &Camera::default_view(size, size), incoherent, reference)
+    }
+
+    /// [`Self::new`] with the mesh framed as renders frame an object: seen
+    /// from the default view's direction ([`crate::camera::DEFAULT_EYE`],
+    /// [`crate::camera::DEFAULT_FOV`]) at the distance where its bounding
+    /// sphere (around its box) is as tall as the image. The box covers about
+    /// half the image and the mesh less: most camera rays miss, many of them
+    /// the box itself (about 80% miss on suzanne and the dragons; the
+    /// default view of a mesh normalised to the unit sphere, [`Self::new`],
+    /// leaves more of them outside the box).
+    pub fn framed(prims: &Arc<Primitives>, size: u32, incoherent: usize, reference: &dyn Tracer) -> Self {
+        let b = prims.world_bounds();
+        let (centre, radius) = (0.5 * (b.min + b.max), 0.5 * (b.max - b.min).length());
+        let half = (0.5 * crate::camera::DEFAULT_FOV).to_radians();
+        let eye = centre + radius / half.tan() * crate::camera::DEFAULT_EYE.normalize();
+        let camera = Camera::look_at(eye, centre, Vec3::Y, crate::camera::DEFAULT_FOV, size, size);
+        Self::with_camera(prims, &camera, incoherent, reference)
+    }
+
+    /// The sets with `camera`'s pixel-centre rays as the primary rays.
+    fn with_camera(prims: &Arc<Primitives>, camera: &Camera, incoherent: usize, reference: &dyn Tracer) -> Self {
+        let size = camera.width;
+        assert_eq!(camera.width, camera.height, "the shadow rays' quarters assume a square image");
+        let primary = camera.pixel_centre_rays();
         let hits: Vec<Option<Hit>> = primary.par_iter().map(|r| reference.intersect(r)).collect();
         let quarter = |q: usize| q * size as usize / SHADOW_LIGHTS.len() * size as usize;
         let shadow = SHADOW_LIGHTS

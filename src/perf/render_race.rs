@@ -110,6 +110,8 @@ pub fn race_scene(scene_path: &Path, opts: &RenderRaceOptions) -> Result<SceneRa
             opponent: "embree".into(),
             threads,
             rays: 0,
+            hits: 0,
+            embree_hits: 0,
             times: Vec::new(),
             walls: Vec::new(),
         };

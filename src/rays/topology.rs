@@ -7,6 +7,28 @@ use glam::Vec3;
 
 use crate::geometry::Primitives;
 
+/// The triangles of `prims` as an indexed mesh: each distinct vertex
+/// position once (in order of first use) and three indices per triangle, in
+/// triangle order. Vertices are welded by exact position (bit for bit).
+pub fn welded(prims: &Primitives) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let key = |p: Vec3| (p.x.to_bits(), p.y.to_bits(), p.z.to_bits());
+    let mut ids: HashMap<(u32, u32, u32), u32> = HashMap::new();
+    let mut pos = Vec::new();
+    let tris = prims
+        .triangles
+        .iter()
+        .map(|t| {
+            t.v.map(|p| {
+                *ids.entry(key(p)).or_insert_with(|| {
+                    pos.push(p);
+                    pos.len() as u32 - 1
+                })
+            })
+        })
+        .collect();
+    (pos, tris)
+}
+
 /// Shared-edge and vertex-fan topology of the triangles, with vertices
 /// welded by exact position (so unwelded seams with identical coordinates,
 /// like the teapot's, count as shared).
@@ -20,21 +42,7 @@ pub struct Topology {
 impl Topology {
     /// Compute the topology of `prims.triangles`.
     pub fn new(prims: &Primitives) -> Self {
-        let key = |p: Vec3| (p.x.to_bits(), p.y.to_bits(), p.z.to_bits());
-        let mut ids: HashMap<(u32, u32, u32), u32> = HashMap::new();
-        let mut pos = Vec::new();
-        let tris: Vec<[u32; 3]> = prims
-            .triangles
-            .iter()
-            .map(|t| {
-                t.v.map(|p| {
-                    *ids.entry(key(p)).or_insert_with(|| {
-                        pos.push(p);
-                        pos.len() as u32 - 1
-                    })
-                })
-            })
-            .collect();
+        let (pos, tris) = welded(prims);
         let mut edges: HashMap<(u32, u32), Vec<(u32, bool)>> = HashMap::new();
         let mut fans: Vec<Vec<u32>> = vec![Vec::new(); pos.len()];
         for (i, t) in tris.iter().enumerate() {
