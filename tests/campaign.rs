@@ -101,7 +101,14 @@ fn assert_same(a: &[Vec<u8>; 3], b: &[Vec<u8>; 3], what: &str) {
 fn killed_twenty_times_and_sharded_four_ways_it_merges_like_one_uninterrupted_run() {
     let d = campaign_dir("campaign-kill");
     let items: usize = run_ok(&d, &["campaign", "plan.toml", "--list"]).lines().filter(|l| !l.starts_with('#')).count();
-    assert_eq!(items, 10 * 5, "10 inputs x (4 parity sets + speed)");
+    // Every mesh file of scenes/meshes and the broken one, each with 4 parity sets and speed.
+    let inputs = std::fs::read_dir(d.join("meshes"))
+        .unwrap()
+        .flatten()
+        .filter(|e| rtdiff::mesh::is_mesh_file(&e.path()))
+        .count();
+    assert!(inputs >= 10, "the authored meshes and broken.stl ({inputs})");
+    assert_eq!(items, inputs * 5, "{inputs} inputs x (4 parity sets + speed)");
 
     // One uninterrupted run.
     let t0 = Instant::now();
