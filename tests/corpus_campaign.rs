@@ -71,7 +71,11 @@ fn the_corpus_ci_shard_runs_and_rtdiff_holds_parity_with_embree() {
                 let at = format!("{input}, set {}, {}", s.set, t.tracer);
                 assert_eq!(t.leaks, 0, "{at}");
                 if (input.as_str(), r.item.set.as_deref().unwrap_or("")) != KNOWN_WRONG {
-                    assert_eq!(t.tracer_wrong, 0, "{at}: the arbiter finds rtdiff wrong: {:#?}", t.disputes);
+                    assert_eq!(
+                        t.wrong, 0,
+                        "{at}: the arbiter finds rtdiff wrong ({:?}): {:#?}",
+                        t.wrong_by, t.disputes
+                    );
                 }
             }
         }

@@ -331,3 +331,105 @@ fn primitive_ids_are_triangle_positions_in_the_file() {
     let (code, out, _) = rtdiff(&["judge", s(&obj), "--rays", s(&rays), "--hits", s(&wrong), "--reference", "brute"]);
     assert_eq!(code, 2, "{out}");
 }
+
+/// `bench --race --tracer plugin:PATH` races a third-party plugin against Embree and rtdiff in one
+/// run: the plugin's contests on every workload in the JSON, its table against Embree's MEDIUM
+/// modes and rtdiff in the text; `--tracer` takes plugins only and applies to the race only.
+#[cfg(feature = "embree")]
+#[test]
+fn the_race_runs_a_plugin_against_embree_and_rtdiff() {
+    let d = common::temp_dir("race-plugin");
+    let json = d.join("race.json");
+    let tracer = format!("plugin:{}", s(&third_party("tinybvh")));
+    let (code, out, err) = rtdiff(&[
+        "bench",
+        "--race",
+        "1",
+        "--threads",
+        "1",
+        "--size",
+        "64",
+        "--incoherent",
+        "4096",
+        "--tracer",
+        &tracer,
+        "--json",
+        s(&json),
+        s(&suzanne()),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let contests = report["meshes"][0]["contests"].as_array().unwrap();
+    let label = "plugin:tinybvh 1.6.8";
+    for set in ["build", "camera", "incoherent", "shadow", "batch camera", "batch shadow"] {
+        let c = contests.iter().find(|c| c["name"] == set && c["opponent"] == label);
+        let c = c.unwrap_or_else(|| panic!("no {set} contest against {label}"));
+        let times = c["times"].as_array().unwrap();
+        assert!(!times.is_empty() && times.iter().all(|t| t[1].as_f64().unwrap() > 0.0), "{set}: {times:?}");
+        if set != "build" {
+            assert!(c["opponent_hits"].as_u64().unwrap() > 0, "{set}: the plugin found no hit");
+        }
+    }
+    assert!(out.contains(&format!("{label} against Embree and rtdiff")), "{out}");
+    let row = out.lines().find(|l| l.trim_start().starts_with("1 camera") && l.contains("ns/ray") && l.contains('['));
+    assert!(row.is_some(), "no camera row in the plugin's table:\n{out}");
+    // Embree's goals stay Embree's: no goal line names the plugin.
+    let goals = out.split("## Goals").nth(1).unwrap();
+    assert!(!goals.contains(label), "{goals}");
+    for args in [
+        vec!["bench", "--race", "1", "--tracer", "embree", s(&suzanne())],
+        vec!["bench", "--tracer", &tracer, s(&suzanne())],
+    ] {
+        let (code, _, err) = rtdiff(&args);
+        assert_eq!(code, 1, "{args:?}: {err}");
+        assert!(err.contains("--tracer") && !err.contains("panicked"), "{args:?}: {err}");
+    }
+}
+
+/// A campaign plan names plugins as tracers (`plugin:PATH`, relative to the plan's folder): the
+/// merged report has each plugin's verdicts, and the C plugin whose distances are scaled by
+/// 1 + 1e-4 is wrong by distance (the arbiter's exact hit decides), the correct one is not.
+#[test]
+fn a_campaign_runs_plugins_named_in_its_plan() {
+    let d = common::temp_dir("campaign-plugins");
+    std::fs::create_dir_all(d.join("meshes")).unwrap();
+    std::fs::copy(suzanne(), d.join("meshes/suzanne.obj")).unwrap();
+    std::fs::copy(c_plugin(Some("T")), d.join("brute_t.so")).unwrap();
+    std::fs::copy(c_plugin(None), d.join("brute_ok.so")).unwrap();
+    let plan = r#"
+name = "plugins"
+meshes = ["meshes"]
+tracers = ["rtdiff", "plugin:brute_ok.so", "plugin:brute_t.so"]
+reference = "brute"
+reports = ["parity"]
+
+[rays]
+sets = ["primary", "edges"]
+count = 400
+seed = 3
+"#;
+    common::write(&d, "plan.toml", plan);
+    let (code, _, err) = rtdiff(&["campaign", s(&d.join("plan.toml")), "-o", s(&d.join("out")), "--quiet"]);
+    assert_eq!(code, 0, "{err}");
+    let (code, _, err) = rtdiff(&["campaign", "merge", s(&d.join("out")), "-o", s(&d.join("report"))]);
+    assert_eq!(code, 0, "{err}");
+    let c: rtdiff::campaign::Campaign =
+        serde_json::from_slice(&std::fs::read(d.join("report/campaign.json")).unwrap()).unwrap();
+    let mut seen = std::collections::BTreeMap::new();
+    for r in &c.results {
+        for set in &r.parity {
+            for t in &set.tracers {
+                let e = seen.entry(t.tracer.clone()).or_insert((0u64, 0u64));
+                e.0 += t.wrong;
+                e.1 += t.wrong_by.get("distance").copied().unwrap_or(0);
+            }
+        }
+    }
+    let broken: Vec<_> = seen.iter().filter(|&(_, &(w, _))| w > 0).collect();
+    assert_eq!(broken.len(), 1, "exactly the broken plugin is wrong: {seen:?}");
+    let (name, &(wrong, distance)) = broken[0];
+    assert!(name.starts_with("plugin:") && wrong > 100 && distance == wrong, "{seen:?}");
+    assert_eq!(seen.len(), 3, "{seen:?}");
+    let md = std::fs::read_to_string(d.join("report/campaign.md")).unwrap();
+    assert!(md.contains(&format!("{name}: ")) && md.contains("wrong (distance"), "{md}");
+}

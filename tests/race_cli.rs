@@ -55,7 +55,7 @@ fn the_race_runs_and_reports_the_walks_instruction_set() {
         // count on every ray set, and the camera rays mostly miss the cube
         // (framed by its bounding sphere) without all missing it.
         for c in contests.iter().filter(|c| c["name"] != "build") {
-            assert_eq!(c["hits"], c["embree_hits"], "{extra:?}: {} against {}", c["name"], c["opponent"]);
+            assert_eq!(c["hits"], c["opponent_hits"], "{extra:?}: {} against {}", c["name"], c["opponent"]);
         }
         let camera = contests.iter().find(|c| c["name"] == "camera").unwrap();
         let rate = camera["hits"].as_f64().unwrap() / camera["rays"].as_f64().unwrap();

@@ -75,9 +75,19 @@ pub struct TracerParity {
     pub judged: u64,
     /// Of those, rays where the tracer is wrong (beyond its rounding bound of the exact answer).
     pub tracer_wrong: u64,
+    /// Every ray the tracer answered wrong ([`crate::verify::hits::VariantVerdict::wrong`]):
+    /// a primitive the arbiter judged wrong, a distance or barycentrics beyond their bound of
+    /// the exact ones on the right primitive, or a hit that is no hit (an id that names nothing,
+    /// a distance outside the interval, NaN).
+    #[serde(default)]
+    pub wrong: u64,
+    /// `wrong` by class (`primitive`, `distance`, `barycentrics`, `no-such-primitive`, ...).
+    #[serde(default)]
+    pub wrong_by: std::collections::BTreeMap<String, u64>,
     /// Rays where the tracer is not exact but within the bound.
     pub tracer_within_bound: u64,
-    /// Rays where the reference is wrong.
+    /// Rays where the reference is wrong (a primitive the arbiter judged wrong, or a distance
+    /// or barycentrics beyond their bound of the exact ones).
     pub reference_wrong: u64,
     /// Rays where the reference is not exact but within the bound.
     pub reference_within_bound: u64,
@@ -249,6 +259,7 @@ fn summarise(report: &ParityReport) -> Vec<SetParity> {
                 .variants
                 .iter()
                 .map(|v| {
+                    let verdict = crate::verify::hits::VariantVerdict::of(s, v);
                     let a = v.arbiter.clone().unwrap_or_default();
                     let count = |m: &std::collections::BTreeMap<String, u64>, k: &str| m.get(k).copied().unwrap_or(0);
                     TracerParity {
@@ -262,8 +273,10 @@ fn summarise(report: &ParityReport) -> Vec<SetParity> {
                         bary_over_bound: v.bary_over_bound,
                         judged: a.judged,
                         tracer_wrong: count(&a.native, "wrong"),
+                        wrong: verdict.wrong,
+                        wrong_by: verdict.wrong_by,
                         tracer_within_bound: count(&a.native, "within-bound"),
-                        reference_wrong: count(&a.reference, "wrong"),
+                        reference_wrong: count(&a.reference, "wrong") + a.beyond_bound.reference_wrong,
                         reference_within_bound: count(&a.reference, "within-bound"),
                         ill_conditioned: count(&a.classes, "ill-conditioned"),
                         disputes: a

@@ -54,21 +54,23 @@ pub struct Campaign {
 
 /// A tracer's verdict on one set: `agree` (every hit the reference's, distances and
 /// barycentrics within bounds), `N judged, all right` (N disagreements, the tracer exact or
-/// within its rounding bound on each), `N judged, W wrong` (the tracer beyond the bound on W),
-/// with `, L leaks` and `, D beyond distance bound` when there are any.
+/// within its rounding bound on each), `N judged, W wrong (class n, ...)` (the tracer beyond
+/// the bound on W, by class), with `, L leaks` when there are any. Distances and barycentrics
+/// beyond their bounds on the same primitive count as judged: the arbiter's exact hit decides.
 pub fn verdict(t: &super::item::TracerParity) -> String {
-    let mut s = if t.disagreements == 0 {
+    let beyond = t.dist_over_bound + t.bary_over_bound;
+    let judged = t.judged + beyond;
+    let mut s = if t.disagreements == 0 && beyond == 0 && t.wrong == 0 {
         "agree".to_string()
-    } else if t.tracer_wrong == 0 && t.judged == t.disagreements {
-        format!("{} judged, all right", t.judged)
+    } else if t.wrong == 0 && t.judged == t.disagreements {
+        format!("{judged} judged, all right")
     } else {
-        format!("{} judged, {} wrong", t.judged, t.tracer_wrong)
+        let by: Vec<String> = t.wrong_by.iter().map(|(k, n)| format!("{k} {n}")).collect();
+        let by = if by.is_empty() { String::new() } else { format!(" ({})", by.join(", ")) };
+        format!("{judged} judged, {} wrong{by}", t.wrong)
     };
     if t.leaks > 0 {
         s.push_str(&format!(", {} leaks", t.leaks));
-    }
-    if t.dist_over_bound + t.bary_over_bound > 0 {
-        s.push_str(&format!(", {} beyond distance bound", t.dist_over_bound + t.bary_over_bound));
     }
     s
 }
@@ -210,8 +212,8 @@ fn summarise(manifest: &Manifest, results: &[ItemResult]) -> Vec<InputSummary> {
             let cell = row.parity.entry(s.set.clone()).or_default();
             for t in &s.tracers {
                 cell.insert(t.tracer.clone(), verdict(t));
-                row.judged += t.judged;
-                row.tracer_wrong += t.tracer_wrong;
+                row.judged += t.judged + t.dist_over_bound + t.bary_over_bound;
+                row.tracer_wrong += t.wrong;
                 row.reference_wrong += t.reference_wrong;
             }
         }

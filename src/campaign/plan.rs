@@ -168,9 +168,9 @@ pub struct Plan {
 ///   traversals `basic`, `priority-queue`, `sorted-vector`, `nth-element`, `fast`);
 /// - `embree` (robust flag, HIGH quality), `embree:QUALITY` (`low`, `medium`, `high`) and
 ///   `embree:QUALITY:default` (Embree's default scene flags);
-/// - `brute` (every triangle against every ray, watertight).
-///
-/// `plugin:PATH` (tracers loaded from a shared library) is refused until this build has them.
+/// - `brute` (every triangle against every ray, watertight);
+/// - `plugin:PATH`, a shared library implementing `include/rtdiff_tracer.h`, loaded here (a
+///   relative path is taken from the current folder; [`resolve`] takes it from the plan's).
 pub fn parse_tracer(spec: &str) -> Result<AccelConfig> {
     use clap::ValueEnum;
     let bad = |why: String| Error::Invalid(format!("tracer '{spec}': {why}"));
@@ -209,7 +209,10 @@ pub fn parse_tracer(spec: &str) -> Result<AccelConfig> {
             Ok(cfg)
         }
         "brute" if rest.is_empty() => Ok(AccelConfig { backend: Backend::Brute, ..Default::default() }),
-        "plugin" => Err(bad("plugin tracers are not in this build of rtdiff".into())),
+        "plugin" if !rest.is_empty() && !rest.join(":").is_empty() => {
+            let id = crate::plugin::load(Path::new(&rest.join(":"))).map_err(|e| bad(e.to_string()))?;
+            Ok(AccelConfig { backend: Backend::Plugin(id), ..Default::default() })
+        }
         _ => Err(bad("expected rtdiff[:BUILDER/TRAVERSAL], embree[:QUALITY[:default]], brute or plugin:PATH".into())),
     }
 }
@@ -254,7 +257,16 @@ pub fn resolve(path: &Path, dir: &Path, file: PlanFile) -> Result<Plan> {
     let tracers = file
         .tracers
         .iter()
-        .map(|t| parse_tracer(t).map_err(|e| err(format!("tracers: {e}"))))
+        .map(|t| {
+            // A plugin's relative path is relative to the plan's folder, like the inputs.
+            let t = match t.strip_prefix("plugin:") {
+                Some(p) if !p.is_empty() && Path::new(p).is_relative() => {
+                    format!("plugin:{}", path.parent().unwrap_or(Path::new("")).join(p).display())
+                }
+                _ => t.clone(),
+            };
+            parse_tracer(&t).map_err(|e| err(format!("tracers: {e}")))
+        })
         .collect::<Result<Vec<_>>>()?;
     let reference = match file.reference.as_str() {
         "embree" => crate::verify::hits::Reference::Embree,
@@ -522,7 +534,8 @@ mod tests {
             ("rtdiff:fast/sah", "unknown builder 'fast'"),
             ("embree:ultra", "unknown quality 'ultra'"),
             ("optix", "expected rtdiff"),
-            ("plugin:./libx.so", "plugin tracers"),
+            ("plugin:./libx.so", "not found"),
+            ("plugin:", "expected rtdiff"),
         ] {
             let e = parse_tracer(bad).unwrap_err().to_string();
             assert!(e.contains(bad) && e.contains(want), "{bad}: {e}");

@@ -10,7 +10,7 @@ use crate::error::{Error, Result};
 use crate::geometry::TriangleTest;
 use crate::limits;
 use crate::perf::bench::{BenchOptions, BenchReport, SHADOW_LIGHTS};
-use crate::perf::race::{EmbreeIsa, MeshRace, RaceOptions};
+use crate::perf::race::{EmbreeIsa, MeshRace, RaceOptions, is_embree};
 use crate::perf::render_race::{RenderRaceOptions, SceneRace};
 
 /// Arguments of `rtdiff bench`.
@@ -89,6 +89,11 @@ pub struct BenchArgs {
     /// `avx2`, `portable`; by default the widest this CPU runs).
     #[arg(long, value_name = "ISA", value_enum)]
     pub rtdiff_isa: Option<WalkIsa>,
+    /// With `--race`: also race this tracer, `plugin:PATH` (a shared library
+    /// implementing include/rtdiff_tracer.h), against rtdiff and Embree on
+    /// the same rays in the same rounds (repeatable).
+    #[arg(long, value_name = "plugin:PATH")]
+    pub tracer: Vec<String>,
     /// Also write the race's typed report as JSON to this file.
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
@@ -134,6 +139,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if args.build_repeats.is_some() {
         return Err(Error::Invalid("--build-repeats applies to --race only".into()));
     }
+    if !args.tracer.is_empty() {
+        return Err(Error::Invalid("--tracer applies to --race only".into()));
+    }
     let scenes =
         if args.scenes.is_empty() { default_meshes(&["dragon_87k", "dragon_full"]) } else { args.scenes.clone() };
     for s in &scenes {
@@ -149,6 +157,27 @@ fn default_meshes(names: &[&str]) -> Vec<PathBuf> {
     let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets");
     let found: Vec<PathBuf> = names.iter().map(|n| d.join(format!("{n}.obj"))).filter(|p| p.exists()).collect();
     if found.is_empty() { vec![d.join(format!("{}.obj", names[0]))] } else { found }
+}
+
+/// The plugins of `--tracer plugin:PATH`, loaded (rtdiff and Embree always race).
+fn race_plugins(tracers: &[String]) -> Result<Vec<crate::plugin::PluginId>> {
+    let mut ids = Vec::new();
+    for t in tracers {
+        match t.strip_prefix("plugin:") {
+            Some(path) if !path.is_empty() => {
+                let id = crate::plugin::load(std::path::Path::new(path))?;
+                if !ids.contains(&id) {
+                    ids.push(id);
+                }
+            }
+            _ => {
+                return Err(Error::Invalid(format!(
+                    "--tracer {t:?}: the race always runs rtdiff and Embree; --tracer adds plugin:PATH (a shared library implementing include/rtdiff_tracer.h)"
+                )));
+            }
+        }
+    }
+    Ok(ids)
 }
 
 /// Everything `rtdiff bench --race` measured.
@@ -178,6 +207,7 @@ fn race(args: &BenchArgs, rounds: usize) -> Result<()> {
             triangle_test: args.triangle_test,
             embree_max_isa: args.embree_max_isa,
             rtdiff_isa: args.rtdiff_isa,
+            plugins: race_plugins(&args.tracer)?,
         };
         for s in &files {
             let prims = crate::rays::load_primitives(s, true)?;
@@ -273,8 +303,13 @@ pub fn print_bench(r: &BenchReport) {
 /// Print one mesh's race: one line per thread count, workload and Embree mode.
 pub fn print_mesh_race(m: &MeshRace, rounds: usize) {
     println!(
-        "\n## {} ({} primitives; rtdiff tree {:.1} bytes per primitive): rtdiff {} against Embree, {rounds} interleaved rounds ({} builds of each per round)",
-        m.mesh, m.primitives, m.rtdiff_bytes_per_primitive, m.rtdiff, m.build_repeats
+        "\n## {} ({} primitives; rtdiff tree {:.1} bytes per primitive): rtdiff {} against Embree{}, {rounds} interleaved rounds ({} builds of each per round)",
+        m.mesh,
+        m.primitives,
+        m.rtdiff_bytes_per_primitive,
+        m.rtdiff,
+        plugins(m).iter().map(|p| format!(" and {p}")).collect::<String>(),
+        m.build_repeats
     );
     println!(
         "instruction sets: rtdiff {}{}, Embree {}{}",
@@ -294,23 +329,23 @@ pub fn print_mesh_race(m: &MeshRace, rounds: usize) {
         );
     }
     println!(
-        "ratio = Embree time / rtdiff time in the same round (above 1: rtdiff faster); 1 thread: CPU time, more: wall clock; \
-         Embree called through its C API as its documentation shows, rtdiff through Box<dyn Tracer>; hits = rtdiff's share of the rays that hit"
+        "ratio = opponent's time / rtdiff's time in the same round (above 1: rtdiff faster); 1 thread: CPU time, more: wall clock; \
+         Embree called through its C API as its documentation shows, rtdiff through Box<dyn Tracer>, plugins through their ABI calls; hits = rtdiff's share of the rays that hit"
     );
     println!(
-        "{:>3} {:<18} {:<22} {:>6} {:>16} {:>16} {:>7} {:>7} {:>7} {:>7}",
-        "thr", "workload", "opponent", "hits", "rtdiff (median)", "Embree (median)", "ratio", "q1", "q3", "wins"
+        "{:>3} {:<18} {:<22} {:>6} {:>16} {:>18} {:>7} {:>7} {:>7} {:>7}",
+        "thr", "workload", "opponent", "hits", "rtdiff (median)", "opponent (median)", "ratio", "q1", "q3", "wins"
     );
     for c in &m.contests {
         let s = c.summary();
         let (a, b, hits) = if c.rays > 0 {
             let ns = |t: f64| format!("{:.1} ns/ray", t * 1e9 / c.rays as f64);
-            (ns(s.rtdiff_s), ns(s.embree_s), format!("{:.1}%", 100.0 * c.hit_rate()))
+            (ns(s.rtdiff_s), ns(s.opponent_s), format!("{:.1}%", 100.0 * c.hit_rate()))
         } else {
-            (format!("{:.2} ms", s.rtdiff_s * 1e3), format!("{:.2} ms", s.embree_s * 1e3), "-".into())
+            (format!("{:.2} ms", s.rtdiff_s * 1e3), format!("{:.2} ms", s.opponent_s * 1e3), "-".into())
         };
         println!(
-            "{:>3} {:<18} {:<22} {:>6} {:>16} {:>16} {:>7.3} {:>7.3} {:>7.3} {:>4}/{}",
+            "{:>3} {:<18} {:<22} {:>6} {:>16} {:>18} {:>7.3} {:>7.3} {:>7.3} {:>4}/{}",
             c.threads,
             c.name,
             c.opponent,
@@ -343,7 +378,57 @@ pub fn print_mesh_race(m: &MeshRace, rounds: usize) {
         }
     }
     for (set, opp, a, b) in &m.hit_count_differences {
-        println!("note: {} hits differ on {set} against {opp}: rtdiff {a}, Embree {b}", a.abs_diff(*b));
+        println!("note: {} hits differ on {set} against {opp}: rtdiff {a}, {opp} {b}", a.abs_diff(*b));
+    }
+    print_plugins_against_embree(m);
+}
+
+/// The plugins raced on `m`, by label.
+fn plugins(m: &MeshRace) -> Vec<String> {
+    let mut labels: Vec<String> = Vec::new();
+    for c in m.contests.iter().filter(|c| !crate::perf::race::is_embree(&c.opponent)) {
+        if !labels.contains(&c.opponent) {
+            labels.push(c.opponent.clone());
+        }
+    }
+    labels
+}
+
+/// Each plugin against Embree's MEDIUM modes and rtdiff, round by round
+/// ([`MeshRace::versus`]): the plugin's time per ray and the medians of the
+/// others' time over the plugin's (above 1: the plugin is faster).
+fn print_plugins_against_embree(m: &MeshRace) {
+    for p in plugins(m) {
+        println!(
+            "\n{p} against Embree and rtdiff (ratio = the other's time / the plugin's in the same round; above 1: the plugin is faster; median [q1, q3])"
+        );
+        let against = ["embree-medium", "embree-medium-default", "rtdiff"];
+        println!(
+            "{:>3} {:<18} {:>16} {:>24} {:>24} {:>24}",
+            "thr",
+            "workload",
+            p.as_str(),
+            against[0],
+            against[1],
+            "rtdiff"
+        );
+        for c in m.contests.iter().filter(|c| c.opponent == p) {
+            let s = c.summary();
+            let own = if c.rays > 0 {
+                format!("{:.1} ns/ray", s.opponent_s * 1e9 / c.rays as f64)
+            } else {
+                format!("{:.2} ms", s.opponent_s * 1e3)
+            };
+            let cells: Vec<String> = against
+                .iter()
+                .map(|&o| {
+                    // The other's time over the plugin's: the plugin as the subject.
+                    m.versus(&c.name, c.threads, &p, o)
+                        .map_or("-".into(), |(r, q1, q3)| format!("{r:.3} [{q1:.3}, {q3:.3}]"))
+                })
+                .collect();
+            println!("{:>3} {:<18} {:>16} {:>24} {:>24} {:>24}", c.threads, c.name, own, cells[0], cells[1], cells[2]);
+        }
     }
 }
 
@@ -367,7 +452,7 @@ pub fn print_render_race(r: &[SceneRace], rounds: usize) {
                 format!("{}x{}", s.size.0, s.size.1),
                 c.threads,
                 m.rtdiff_s * 1e3,
-                m.embree_s * 1e3,
+                m.opponent_s * 1e3,
                 m.ratio,
                 m.q1,
                 m.q3,
@@ -424,7 +509,7 @@ pub fn print_goals(meshes: &[MeshRace], renders: &[SceneRace]) {
     line(
         "batches >= 1.0x Embree's 8-wide packets (MEDIUM, robust and default)",
         1.0,
-        worst(&|c| c.name.starts_with("batch") && c.opponent.contains("medium")),
+        worst(&|c| c.name.starts_with("batch") && is_embree(&c.opponent) && c.opponent.contains("medium")),
     );
     // Scaling of each contender's own builds; the goal's figure is rtdiff's
     // scaling over the opponent's (at least 1: rtdiff scales as well),
@@ -434,7 +519,7 @@ pub fn print_goals(meshes: &[MeshRace], renders: &[SceneRace]) {
         .iter()
         .flat_map(|m| {
             let opponents = m.contests.iter().filter(|c| c.name == "build" && c.threads == 2);
-            opponents.filter(|c| c.opponent.contains("medium")).filter_map(move |c| {
+            opponents.filter(|c| is_embree(&c.opponent) && c.opponent.contains("medium")).filter_map(move |c| {
                 let (ours, theirs) = m.build_scaling(&c.opponent, 2)?;
                 Some((ours / theirs, format!("{} build", m.mesh), c.opponent.clone()))
             })

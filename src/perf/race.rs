@@ -31,6 +31,11 @@
 //! --race N --triangle-test moller-trumbore`) rtdiff uses a test that is
 //! not watertight either, which makes `embree-*-default` the like-for-like
 //! opponent.
+//!
+//! Plugins (`rtdiff bench --race N --tracer plugin:PATH`, [`RaceOptions::plugins`])
+//! race as further opponents on the same rays in the same rounds, so that a
+//! library's author reads its time against rtdiff's and Embree's from one
+//! run ([`MeshRace::versus`] compares any two contestants round by round).
 
 use std::sync::Arc;
 
@@ -55,12 +60,14 @@ pub const EMBREE_MODES: [(EmbreeQuality, EmbreeMode); 4] = [
     (EmbreeQuality::High, EmbreeMode::Default),
 ];
 
-/// One contest over the rounds: rtdiff against one Embree mode on one workload.
+/// One contest over the rounds: rtdiff against one opponent (an Embree mode
+/// or a plugin) on one workload.
 #[derive(Clone, Debug, Serialize)]
 pub struct Contest {
     /// `build`, a ray set's name, or `batch <set>` for the batch calls.
     pub name: String,
-    /// The Embree mode's label (`embree-medium`, `embree-high-default`, ...).
+    /// The opponent's label: an Embree mode (`embree-medium`,
+    /// `embree-high-default`, ...) or a plugin (`plugin:NAME`).
     pub opponent: String,
     /// Threads both contenders used.
     pub threads: usize,
@@ -69,11 +76,11 @@ pub struct Contest {
     /// Rays of the set that rtdiff found a hit for (closest hit) or occluded
     /// (any hit), in the first round (0 for the build).
     pub hits: usize,
-    /// The same count from Embree.
-    pub embree_hits: usize,
-    /// Per-round seconds, rtdiff then Embree.
+    /// The same count from the opponent (an Embree mode or a plugin).
+    pub opponent_hits: usize,
+    /// Per-round seconds, rtdiff then the opponent.
     pub times: Vec<(f64, f64)>,
-    /// Builds only: per-round wall-clock seconds, rtdiff then Embree (with
+    /// Builds only: per-round wall-clock seconds, rtdiff then the opponent (with
     /// one thread `times` holds CPU time; the wall clock compares thread
     /// counts, [`MeshRace::build_scaling`]). Empty for ray sets.
     pub walls: Vec<(f64, f64)>,
@@ -84,9 +91,9 @@ pub struct Contest {
 pub struct ContestSummary {
     /// Median seconds of rtdiff.
     pub rtdiff_s: f64,
-    /// Median seconds of Embree.
-    pub embree_s: f64,
-    /// Median of Embree time / rtdiff time (above 1: rtdiff faster).
+    /// Median seconds of the opponent.
+    pub opponent_s: f64,
+    /// Median of the opponent's time / rtdiff's time (above 1: rtdiff faster).
     pub ratio: f64,
     /// First quartile of the ratio.
     pub q1: f64,
@@ -111,7 +118,7 @@ impl Contest {
         let wins = ratio.iter().filter(|&&r| r > 1.0).count();
         let (mo, _, _) = quartiles(&mut ours);
         let (me, _, _) = quartiles(&mut theirs);
-        ContestSummary { rtdiff_s: mo, embree_s: me, ratio: m, q1, q3, wins }
+        ContestSummary { rtdiff_s: mo, opponent_s: me, ratio: m, q1, q3, wins }
     }
 }
 
@@ -148,7 +155,7 @@ pub struct MeshRace {
     pub embree_capped: bool,
     /// Every contest, by thread count, workload and opponent.
     pub contests: Vec<Contest>,
-    /// Workloads on which a tracer's hit count differs from rtdiff's: `(set, opponent, rtdiff, Embree)`.
+    /// Workloads on which an opponent's hit count differs from rtdiff's: `(set, opponent, rtdiff, opponent's)`.
     pub hit_count_differences: Vec<(String, String, usize, usize)>,
 }
 
@@ -186,6 +193,24 @@ impl MeshRace {
         let (one, many) = (walls(1)?, walls(threads)?);
         Some((one.0 / many.0, one.1 / many.1))
     }
+
+    /// `subject` against `opponent` on workload `name` with `threads`, each
+    /// an opponent's label or `"rtdiff"`: the median and quartiles over the
+    /// rounds of the opponent's time / the subject's in the same round
+    /// (above 1: the subject is faster). `None` when either was not raced.
+    pub fn versus(&self, name: &str, threads: usize, subject: &str, opponent: &str) -> Option<(f64, f64, f64)> {
+        let times = |who: &str| -> Option<Vec<f64>> {
+            let mut cs = self.contests.iter().filter(|c| c.name == name && c.threads == threads);
+            if who == "rtdiff" {
+                cs.next().map(|c| c.times.iter().map(|t| t.0).collect())
+            } else {
+                cs.find(|c| c.opponent == who).map(|c| c.times.iter().map(|t| t.1).collect())
+            }
+        };
+        let (a, b) = (times(subject)?, times(opponent)?);
+        let mut ratios: Vec<f64> = a.iter().zip(&b).map(|(s, o)| o / s).collect();
+        (!ratios.is_empty()).then(|| quartiles(&mut ratios))
+    }
 }
 
 /// What to race.
@@ -214,6 +239,11 @@ pub struct RaceOptions {
     /// The instruction set of rtdiff's walks ([`crate::bvh::WideBvh::set_isa`]);
     /// `None`: the widest this CPU runs, as users get them.
     pub rtdiff_isa: Option<crate::bvh::WalkIsa>,
+    /// Plugins (`--tracer plugin:PATH`) raced as further opponents, after
+    /// the Embree modes: each builds its scene from the ABI's buffers (made
+    /// once, outside the timing, as Embree's indexed mesh is) and traces
+    /// through the ABI's calls.
+    pub plugins: Vec<crate::plugin::PluginId>,
 }
 
 /// An instruction set Embree's x86 kernels are built for.
@@ -317,13 +347,48 @@ pub fn workloads<'a>(sets: &[(&'static str, &'a [Ray], bool)], batches: bool) ->
     w
 }
 
-/// A contestant on a workload: rtdiff's tracer as users hold it, or an
-/// Embree scene called through its C API.
+/// A contestant on a workload: a tracer behind rtdiff's interface (rtdiff's
+/// own as users hold it, or a plugin's scene, whose calls go straight to the
+/// ABI's), or an Embree scene called through its C API.
 #[cfg(feature = "embree")]
 #[derive(Clone, Copy)]
 enum Contender<'a> {
-    Rtdiff(&'a dyn crate::accel::Tracer),
+    Tracer(&'a dyn crate::accel::Tracer),
     Embree(&'a crate::embree::Scene),
+}
+
+/// An opponent of rtdiff in the race: an Embree mode or a plugin.
+#[cfg(feature = "embree")]
+#[derive(Clone, Copy, Debug)]
+enum Opponent {
+    Embree(EmbreeQuality, EmbreeMode),
+    Plugin(crate::plugin::PluginId),
+}
+
+#[cfg(feature = "embree")]
+impl Opponent {
+    /// The label in reports (`embree-medium`, ..., `plugin:NAME`).
+    fn label(self) -> String {
+        match self {
+            Opponent::Embree(q, m) => crate::backends::embree_label(q, m),
+            Opponent::Plugin(id) => id.plugin().label(),
+        }
+    }
+
+    /// The build phase: 0 with rtdiff's builds (Embree's MEDIUM modes), 1
+    /// Embree's HIGH modes, 2 the plugins (see `race_mesh`).
+    fn phase(self) -> usize {
+        match self {
+            Opponent::Embree(EmbreeQuality::Medium, _) => 0,
+            Opponent::Embree(..) => 1,
+            Opponent::Plugin(_) => 2,
+        }
+    }
+}
+
+/// True when `label` names one of Embree's modes (not a plugin).
+pub fn is_embree(label: &str) -> bool {
+    label.starts_with("embree-")
 }
 
 /// Trace `rays` with `c` the way the workload asks; the number of hits.
@@ -337,14 +402,14 @@ fn run(c: Contender, rays: &[Ray], any: bool, batch: bool, threads: usize) -> us
         match (c, any, batch) {
             // Each ray is written afresh just before its call (`fresh`), as
             // a renderer makes it, not read in place from the set's array.
-            (Contender::Rtdiff(t), false, false) => rs.iter().filter(|r| t.intersect(&fresh(r)).is_some()).count(),
-            (Contender::Rtdiff(t), true, false) => rs.iter().filter(|r| t.occluded(&fresh(r))).count(),
-            (Contender::Rtdiff(t), false, true) => {
+            (Contender::Tracer(t), false, false) => rs.iter().filter(|r| t.intersect(&fresh(r)).is_some()).count(),
+            (Contender::Tracer(t), true, false) => rs.iter().filter(|r| t.occluded(&fresh(r))).count(),
+            (Contender::Tracer(t), false, true) => {
                 let mut out: Vec<Option<Hit>> = vec![None; rs.len()];
                 t.intersect_batch(rs, &mut out);
                 out.iter().filter(|h| h.is_some()).count()
             }
-            (Contender::Rtdiff(t), true, true) => {
+            (Contender::Tracer(t), true, true) => {
                 let mut out = vec![false; rs.len()];
                 t.occluded_batch(rs, &mut out);
                 out.iter().filter(|&&o| o).count()
@@ -483,8 +548,9 @@ mod direct {
     }
 }
 
-/// Race rtdiff against every Embree mode of [`EMBREE_MODES`] on `prims`
-/// with the workloads `sets` (`(name, rays, any-hit)`).
+/// Race rtdiff against every Embree mode of [`EMBREE_MODES`] and every
+/// plugin of [`RaceOptions::plugins`] on `prims` with the workloads `sets`
+/// (`(name, rays, any-hit)`).
 #[cfg(feature = "embree")]
 pub fn race_mesh(
     mesh: &str,
@@ -493,7 +559,7 @@ pub fn race_mesh(
     opts: &RaceOptions,
 ) -> Result<MeshRace> {
     use super::clock::{Clock, cpu_seconds};
-    use crate::backends::{AccelConfig, build_tracer, embree_label};
+    use crate::backends::{AccelConfig, build_tracer};
     use crate::embree::{Device, Scene};
     if opts.rounds == 0 {
         return Err(crate::Error::Invalid("--race needs at least one round".into()));
@@ -530,6 +596,17 @@ pub fn race_mesh(
             None => Scene::with_mode(device, prims, q, m),
         }
     };
+    // A plugin gets the ABI's buffers, made once before any timing.
+    let plugin_buffers = if opts.plugins.is_empty() { None } else { Some(crate::plugin::PluginBuffers::new(prims)?) };
+    let build_plugin = |id: crate::plugin::PluginId| -> Result<crate::plugin::PluginTracer> {
+        let buffers = plugin_buffers.as_ref().expect("buffers made when plugins race");
+        crate::plugin::PluginTracer::from_buffers(id, buffers)
+    };
+    let opponents: Vec<Opponent> = EMBREE_MODES
+        .iter()
+        .map(|&(q, m)| Opponent::Embree(q, m))
+        .chain(opts.plugins.iter().map(|&id| Opponent::Plugin(id)))
+        .collect();
     let build_repeats = opts.build_repeats.max(1);
     let mut contests = Vec::new();
     let mut hit_count_differences = Vec::new();
@@ -561,7 +638,7 @@ pub fn race_mesh(
                 (clock.since(s), r)
             }
         };
-        let names: Vec<String> = EMBREE_MODES.iter().map(|&(q, m)| embree_label(q, m)).collect();
+        let names: Vec<String> = opponents.iter().map(|o| o.label()).collect();
         let m = names.len();
         // What each side's structure holds, from one build each (dropped
         // before the builds are timed).
@@ -596,7 +673,7 @@ pub fn race_mesh(
                 threads,
                 rays: 0,
                 hits: 0,
-                embree_hits: 0,
+                opponent_hits: 0,
                 times: Vec::new(),
                 walls: Vec::new(),
             });
@@ -609,7 +686,7 @@ pub fn race_mesh(
                     threads,
                     rays: rays.len(),
                     hits: 0,
-                    embree_hits: 0,
+                    opponent_hits: 0,
                     times: Vec::new(),
                     walls: Vec::new(),
                 });
@@ -625,22 +702,24 @@ pub fn race_mesh(
         // mode, many times the memory traffic) then never comes right before
         // a build the goals compare: interleaved, it slowed the MEDIUM builds
         // after it by 5-15% (suzanne, dragon_full), against an outside loop
-        // that builds no HIGH scene.
-        let medium: Vec<usize> = (0..m).filter(|&k| EMBREE_MODES[k].0 == EmbreeQuality::Medium).collect();
-        let high: Vec<usize> = (0..m).filter(|&k| EMBREE_MODES[k].0 != EmbreeQuality::Medium).collect();
+        // that builds no HIGH scene. The plugins build last, in a third
+        // phase, each compared with rtdiff's build of the same repetition.
+        let phases: Vec<Vec<usize>> = (0..3).map(|p| (0..m).filter(|&k| opponents[k].phase() == p).collect()).collect();
         let samples = opts.rounds * build_repeats;
         let (mut ours, mut theirs) = (vec![(0.0, 0.0); samples], vec![vec![(0.0, 0.0); m]; samples]);
         let build = |k: Option<usize>| -> Result<(f64, f64)> {
             let (t, w, r) = pool.install(|| match k {
                 None => time_result(threads, &clock, &mut || build_ours(prims.clone()).map(|_| 0)),
-                Some(k) => {
-                    let (q, md) = EMBREE_MODES[k];
-                    time_result(threads, &clock, &mut || embree_scene(&device, q, md).map(|_| 0))
-                }
+                Some(k) => match opponents[k] {
+                    Opponent::Embree(q, md) => {
+                        time_result(threads, &clock, &mut || embree_scene(&device, q, md).map(|_| 0))
+                    }
+                    Opponent::Plugin(id) => time_result(threads, &clock, &mut || build_plugin(id).map(|_| 0)),
+                },
             });
             r.map(|_| (t, w))
         };
-        for (phase, modes) in [(0, &medium), (1, &high)] {
+        for (phase, modes) in phases.iter().enumerate() {
             for round in 0..opts.rounds {
                 for rep in 0..build_repeats {
                     let part = if rep == 0 { 0 } else { usize::MAX - rep };
@@ -672,13 +751,26 @@ pub fn race_mesh(
         // dragon_87k's incoherent rays took 40% longer on each side and
         // Embree's shadow rays 20% longer, rtdiff's not at all).
         let ours = pool.install(|| build_ours(prims.clone()))?;
-        let theirs: Vec<Scene> =
-            EMBREE_MODES.iter().map(|&(q, m)| embree_scene(&device, q, m)).collect::<Result<_>>()?;
+        enum Built {
+            Embree(Scene),
+            Plugin(crate::plugin::PluginTracer),
+        }
+        let theirs: Vec<Built> = opponents
+            .iter()
+            .map(|&o| match o {
+                Opponent::Embree(q, md) => embree_scene(&device, q, md).map(Built::Embree),
+                Opponent::Plugin(id) => build_plugin(id).map(Built::Plugin),
+            })
+            .collect::<Result<_>>()?;
         for round in 0..opts.rounds {
             for (w, (wname, rays, any, batch)) in loads.iter().enumerate() {
                 let (mut ta, mut tb, mut ha, mut hb) = (0.0, vec![0.0; m], 0, vec![0; m]);
                 for k in run_order(m + 1, round, 1 + w) {
-                    let who = if k == m { Contender::Rtdiff(ours.as_ref()) } else { Contender::Embree(&theirs[k]) };
+                    let who = match theirs.get(k) {
+                        None => Contender::Tracer(ours.as_ref()),
+                        Some(Built::Embree(s)) => Contender::Embree(s),
+                        Some(Built::Plugin(p)) => Contender::Tracer(p),
+                    };
                     let (t, h) = pool.install(|| time(&mut || run(who, rays, *any, *batch, threads)));
                     if k == m {
                         (ta, ha) = (t, h);
@@ -690,7 +782,7 @@ pub fn race_mesh(
                     let c = &mut contests[first + m * (w + 1) + k];
                     c.times.push((ta, tb[k]));
                     if round == 0 {
-                        (c.hits, c.embree_hits) = (ha, hb[k]);
+                        (c.hits, c.opponent_hits) = (ha, hb[k]);
                         if ha != hb[k] {
                             hit_count_differences.push((wname.clone(), names[k].clone(), ha, hb[k]));
                         }

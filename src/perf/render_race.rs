@@ -111,7 +111,7 @@ pub fn race_scene(scene_path: &Path, opts: &RenderRaceOptions) -> Result<SceneRa
             threads,
             rays: 0,
             hits: 0,
-            embree_hits: 0,
+            opponent_hits: 0,
             times: Vec::new(),
             walls: Vec::new(),
         };

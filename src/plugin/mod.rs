@@ -30,6 +30,8 @@ pub struct Plugin {
     pub name: String,
     /// `rtdiff_tracer_features()`'s bits (`ffi::FEATURE_*`).
     pub features: u32,
+    /// The file name, added to the label when another plugin loaded first has the same name.
+    distinct: Option<String>,
     pub(crate) fns: ffi::Fns,
     // Kept open for the life of the process (see the module docs).
     _lib: libloading::Library,
@@ -41,9 +43,13 @@ impl Plugin {
         self.features & ffi::FEATURE_SPHERES != 0
     }
 
-    /// The tracer's label in every report: `plugin:NAME`.
+    /// The tracer's label in every report: `plugin:NAME`, or `plugin:NAME (FILE)` when a
+    /// plugin loaded before it in this process has the same name (two builds of one library).
     pub fn label(&self) -> String {
-        format!("plugin:{}", self.name)
+        match &self.distinct {
+            None => format!("plugin:{}", self.name),
+            Some(file) => format!("plugin:{} ({file})", self.name),
+        }
     }
 }
 
@@ -117,8 +123,12 @@ pub fn load(path: &Path) -> Result<PluginId> {
         .ok_or_else(|| Error::file(path, "rtdiff_tracer_name() returned NULL or text that is not UTF-8"))?;
     // SAFETY: as above.
     let features = unsafe { (fns.features)() };
+    let distinct = table
+        .iter()
+        .any(|(_, p)| p.name == name)
+        .then(|| path.file_name().map_or_else(|| path.display().to_string(), |f| f.to_string_lossy().into_owned()));
     let plugin: &'static Plugin =
-        Box::leak(Box::new(Plugin { path: path.to_path_buf(), name, features, fns, _lib: lib }));
+        Box::leak(Box::new(Plugin { path: path.to_path_buf(), name, features, distinct, fns, _lib: lib }));
     table.push((key, plugin));
     Ok(PluginId(table.len() as u32 - 1))
 }

@@ -91,6 +91,44 @@ pub struct ArbiterStats {
     /// The rays where the tracer is not exact: all of them on well-conditioned
     /// rays, the first `max_replays` ill-conditioned ones.
     pub replays: Vec<Replay>,
+    /// Rays on which both return the same primitive (or tie) but their
+    /// distances or barycentrics differ beyond the bounds of
+    /// [`super::bounds`], each judged against the exact distance and
+    /// barycentrics of the tracer's primitive ([`Arbiter::evaluate`]).
+    pub beyond_bound: BeyondBound,
+}
+
+/// The arbiter's judgment of the rays whose distances or barycentrics differ beyond
+/// their bounds ([`ArbiterStats::beyond_bound`]): each side is right when its answer is
+/// within the bound of [`super::bounds`] (taken at its own hit) of the exact one.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct BeyondBound {
+    /// Rays judged.
+    pub judged: u64,
+    /// Rays where the tracer's distance and barycentrics are within their bounds of the exact ones.
+    pub tracer_right: u64,
+    /// Rays where the tracer's distance is beyond its bound of the exact one.
+    pub tracer_distance_wrong: u64,
+    /// Rays where the tracer's barycentrics are beyond their bound of the exact ones.
+    pub tracer_barycentrics_wrong: u64,
+    /// Rays where the tracer is wrong (either way, or the exact distance does not exist).
+    pub tracer_wrong: u64,
+    /// Rays where the reference's distance or barycentrics are beyond their bounds of the exact ones.
+    pub reference_wrong: u64,
+}
+
+/// True when `h`'s distance is within its bound (`bounds`, at `h`) of `exact`'s, and
+/// `(distance right, barycentrics right)` (barycentrics: triangles only).
+fn right_against(set: &RaySet, i: usize, h: &Hit, exact: &super::arbiter::Exact) -> (bool, bool) {
+    let ray = &set.rays[i];
+    if exact.t.is_none() || !exact.t_f64.is_finite() {
+        return (false, false);
+    }
+    let g = super::bounds::hit_geom(&set.prims, ray, h);
+    let (tb, bb) = super::bounds::bounds(ray, h, &g);
+    let t_ok = (h.t as f64 - exact.t_f64).abs() <= tb;
+    let b_ok = !g.is_triangle || (h.u as f64 - exact.bary[1]).abs().max((h.v as f64 - exact.bary[2]).abs()) <= bb;
+    (t_ok, b_ok)
 }
 
 fn verdict_name(v: Verdict) -> &'static str {
@@ -136,6 +174,35 @@ pub fn arbitrate(
         })
         .collect();
     let mut s = ArbiterStats { judged: judged.len() as u64, ..Default::default() };
+    // Same primitive (or a tie) with distances or barycentrics beyond their bounds
+    // (`super::classify::compare`'s `beyond_bound`): judged against the exact hit on the
+    // tracer's primitive.
+    let beyond: Vec<usize> = (0..n)
+        .filter(|&i| match (&ours.hits[i], &reference.hits[i]) {
+            (Some(a), Some(b)) if a.fault(&set.rays[i], set.prims.len()).is_none() => {
+                super::classify::beyond_bounds(&set.prims, &set.rays[i], a, b)
+            }
+            _ => false,
+        })
+        .collect();
+    let verdicts: Vec<((bool, bool), (bool, bool))> = beyond
+        .par_iter()
+        .map(|&i| {
+            let (a, b) = (ours.hits[i].expect("a hit"), reference.hits[i].expect("a hit"));
+            let exact = arbiter.evaluate(&set.rays[i], a.prim);
+            let theirs = if b.prim == a.prim { exact.clone() } else { arbiter.evaluate(&set.rays[i], b.prim) };
+            (right_against(set, i, &a, &exact), right_against(set, i, &b, &theirs))
+        })
+        .collect();
+    for ((t_ok, b_ok), (rt_ok, rb_ok)) in verdicts {
+        let bb = &mut s.beyond_bound;
+        bb.judged += 1;
+        bb.tracer_right += (t_ok && b_ok) as u64;
+        bb.tracer_distance_wrong += !t_ok as u64;
+        bb.tracer_barycentrics_wrong += !b_ok as u64;
+        bb.tracer_wrong += !(t_ok && b_ok) as u64;
+        bb.reference_wrong += !(rt_ok && rb_ok) as u64;
+    }
     for (i, truth, vn, vr) in judged {
         let ray = &set.rays[i];
         let class = ArbiterClass::of(vn, vr, truth.ill_conditioned());

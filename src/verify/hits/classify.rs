@@ -224,3 +224,17 @@ pub fn compare(label: &str, set: &RaySet, ours: Answers, reference: Answers, max
     }
     s
 }
+
+/// True when `a` (the tracer's) and `b` (the reference's) name the same primitive, or tie
+/// within the distance bound, and their distances or (same primitive) barycentrics differ
+/// beyond the bounds of [`super::bounds`]: the rays [`compare`] counts in `beyond_bound`.
+pub(crate) fn beyond_bounds(prims: &Primitives, ray: &Ray, a: &Hit, b: &Hit) -> bool {
+    let g = hit_geom(prims, ray, b);
+    let (tb, bb) = bounds(ray, b, &g);
+    let dt = (a.t as f64 - b.t as f64).abs();
+    if a.prim != b.prim && dt > tb {
+        return false;
+    }
+    let db = (a.u as f64 - b.u as f64).abs().max((a.v as f64 - b.v as f64).abs());
+    dt > tb || (a.prim == b.prim && g.is_triangle && db > bb)
+}

@@ -56,22 +56,31 @@ impl VariantVerdict {
         for (k, n) in &v.invalid_classes {
             add(k, *n);
         }
-        add("distance", v.dist_over_bound);
-        add("barycentrics", v.bary_over_bound);
         let differ = v.native_miss_ref_hit + v.native_hit_ref_miss + v.prim_diff + v.prim_ties;
         let (mut differ_exact, mut within_bound, mut unjudged) = (0, 0, 0);
-        match &v.arbiter {
+        // Distances and barycentrics beyond their bounds: wrong where the arbiter finds the
+        // tracer's beyond its bound of the exact hit (the reference is off on the others:
+        // the tracer is within the bound), all wrong without the arbiter.
+        let beyond_wrong = match &v.arbiter {
             Some(a) => {
                 let get = |k: &str| a.native.get(k).copied().unwrap_or(0);
                 add("primitive", get("wrong"));
                 differ_exact = get("exact");
-                within_bound = get("within-bound");
+                within_bound = get("within-bound") + a.beyond_bound.tracer_right;
+                add("distance", a.beyond_bound.tracer_distance_wrong);
+                add("barycentrics", a.beyond_bound.tracer_barycentrics_wrong);
+                a.beyond_bound.tracer_wrong
             }
-            None => unjudged = differ,
-        }
+            None => {
+                unjudged = differ;
+                add("distance", v.dist_over_bound);
+                add("barycentrics", v.bary_over_bound);
+                v.beyond_bound
+            }
+        };
         let wrong_primitive = wrong_by.get("primitive").copied().unwrap_or(0);
         // A ray beyond both bounds is one wrong ray (in two classes).
-        let wrong = v.invalid + wrong_primitive + v.beyond_bound;
+        let wrong = v.invalid + wrong_primitive + beyond_wrong;
         let agree = (v.rays as u64).saturating_sub(differ + v.invalid + v.beyond_bound);
         Self {
             tracer: v.tracer.clone(),
