@@ -3,40 +3,8 @@
 
 use std::ffi::{c_char, c_void};
 
-/// `RTDIFF_TRACER_ABI_VERSION`.
-pub const ABI_VERSION: u32 = 1;
-/// `RTDIFF_INVALID_ID`: the primitive id of a miss.
-pub const INVALID_ID: u32 = u32::MAX;
-/// `RTDIFF_FEATURE_SPHERES`.
-pub const FEATURE_SPHERES: u32 = 1;
-
-/// `rtdiff_ray`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct RtdiffRay {
-    /// Origin.
-    pub org: [f32; 3],
-    /// Direction (not normalised).
-    pub dir: [f32; 3],
-    /// Start of the interval.
-    pub tnear: f32,
-    /// End of the interval.
-    pub tfar: f32,
-}
-
-/// `rtdiff_hit`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct RtdiffHit {
-    /// Distance.
-    pub t: f32,
-    /// Primitive id, [`INVALID_ID`] for a miss.
-    pub prim: u32,
-    /// Barycentric weight of vertex 1.
-    pub u: f32,
-    /// Barycentric weight of vertex 2.
-    pub v: f32,
-}
+// The header's constants and layouts, from the crate that plugins written in Rust use too.
+pub use rtdiff_plugin_abi::{ABI_VERSION, FEATURE_SPHERES, Hit as RtdiffHit, INVALID_ID, Ray as RtdiffRay};
 
 const _: () = assert!(std::mem::size_of::<RtdiffRay>() == 32 && std::mem::size_of::<RtdiffHit>() == 16);
 

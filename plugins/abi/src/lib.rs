@@ -239,19 +239,9 @@ macro_rules! export_tracer {
             hits: *mut $crate::Hit,
             count: usize,
         ) {
-            if count == 0 {
-                return;
-            }
             // SAFETY: the header's contract.
-            let (s, r, h) = unsafe {
-                (
-                    &*scene.cast::<$t>(),
-                    ::std::slice::from_raw_parts(rays, count),
-                    ::std::slice::from_raw_parts_mut(hits, count),
-                )
-            };
-            for (ray, hit) in r.iter().zip(h) {
-                *hit = <$t as $crate::Tracer>::intersect(s, ray);
+            unsafe {
+                $crate::for_each_ray::<$t, $crate::Hit>(scene, rays, hits, count, <$t as $crate::Tracer>::intersect)
             }
         }
 
@@ -266,20 +256,38 @@ macro_rules! export_tracer {
             occluded: *mut u8,
             count: usize,
         ) {
-            if count == 0 {
-                return;
-            }
             // SAFETY: the header's contract.
-            let (s, r, o) = unsafe {
-                (
-                    &*scene.cast::<$t>(),
-                    ::std::slice::from_raw_parts(rays, count),
-                    ::std::slice::from_raw_parts_mut(occluded, count),
-                )
-            };
-            for (ray, out) in r.iter().zip(o) {
-                *out = <$t as $crate::Tracer>::occluded(s, ray) as u8;
+            unsafe {
+                $crate::for_each_ray::<$t, u8>(scene, rays, occluded, count, |s, r| {
+                    <$t as $crate::Tracer>::occluded(s, r) as u8
+                })
             }
         }
     };
+}
+
+/// The batch calls' common part ([`export_tracer!`]'s `rtdiff_tracer_intersect_n` and
+/// `rtdiff_tracer_occluded_n`): `f` on each ray, its answer into `out`.
+///
+/// # Safety
+/// `scene` points to a live `T`; `rays` and `out` hold `count` items each (they may be
+/// dangling when `count` is 0).
+#[doc(hidden)]
+pub unsafe fn for_each_ray<T, O>(
+    scene: *const std::ffi::c_void,
+    rays: *const Ray,
+    out: *mut O,
+    count: usize,
+    f: impl Fn(&T, &Ray) -> O,
+) {
+    if count == 0 {
+        return;
+    }
+    // SAFETY: the caller's contract.
+    let (s, r, o) = unsafe {
+        (&*scene.cast::<T>(), std::slice::from_raw_parts(rays, count), std::slice::from_raw_parts_mut(out, count))
+    };
+    for (ray, out) in r.iter().zip(o) {
+        *out = f(s, ray);
+    }
 }
