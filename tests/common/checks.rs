@@ -9,18 +9,14 @@ use rtdiff::film::Image;
 use rtdiff::geometry::Hit;
 use rtdiff::integrator::debug::RayNode;
 use rtdiff::scene::Scene;
-use rtdiff::verify::image::stats::{Moments, WelchReport};
+use rtdiff::verify::image::stats::WelchReport;
 
-/// Relative tolerance of deterministic pixels (the 1e-3). Both renderers
-/// trace the same float32 triangles from the same camera and sum the same terms in
-/// float32; measured agreement away from the classified pixels is ~1e-6 relative.
-pub const REL_TOL: f32 = 1e-3;
-/// Below this value a pixel is compared absolutely: |a - b| <= REL_TOL * FLOOR =
-/// 1e-5, 30x below the darkest non-zero 8-bit sRGB step (linear 3.0e-4), so near-black
-/// pixels do not fail on rounding of values that no display can show.
-pub const FLOOR: f32 = 1e-2;
-/// Fraction of pixels that must agree on deterministic scenes (the 99.9%).
-pub const MIN_AGREEING: f64 = 0.999;
+// The deterministic check's tolerances and the classifier's helpers are the library's
+// (`rtdiff check-image` uses them on other renderers' images).
+#[allow(unused_imports)] // each test binary uses some of them
+pub use rtdiff::verify::image::check::{
+    BLACK, FLOOR, MIN_AGREEING, REL_TOL, barycentrics_f64, has_shadow_edge, has_terminator, numerically_black, rel,
+};
 /// False-alarm rate of the statistical check (Benjamini-Hochberg q).
 pub const FDR: f64 = 0.01;
 
@@ -90,68 +86,11 @@ pub fn classify(scene: &Scene, tracer: &dyn Tracer, x: u32, y: u32) -> Class {
     Class::Unexplained
 }
 
-/// True when a light sample of `n` or of its children is on opposite sides of the
-/// shading and geometric normals, or grazes the geometric plane (see [`Class`]).
-pub fn has_terminator(scene: &Scene, n: &RayNode) -> bool {
-    if let Some(h) = &n.hit {
-        let p = Vec3::from(h.position);
-        let ns = Vec3::from(h.normal);
-        let nt = scene.prims.triangles.len();
-        let ng = if (h.prim as usize) < nt {
-            scene.prims.triangles[h.prim as usize].normal().normalize()
-        } else {
-            (p - scene.prims.spheres[h.prim as usize - nt].center).normalize()
-        };
-        // sin(1.5 degrees) = 0.026.
-        let bad = n.lights.iter().any(|l| {
-            let dir = (Vec3::from(l.position) - p).normalize();
-            let (g, s) = (ng.dot(dir), ns.dot(dir) * ng.dot(ns).signum());
-            g * s < 0.0 || g.abs() < 0.026 || s.abs() < 0.026
-        });
-        if bad {
-            return true;
-        }
-    }
-    n.children.iter().any(|c| has_terminator(scene, c))
-}
-
 /// True when a ray of `n`'s tree meets its surface from the side the shading normal faces away
 /// from (see [`Class::ShadingSide`]; the recorded normal is on the ray's side of the geometric one).
 pub fn shading_side(n: &RayNode) -> bool {
     let hit = n.hit.as_ref().is_some_and(|h| Vec3::from(n.direction).dot(Vec3::from(h.normal)) > 0.0);
     hit || n.children.iter().any(shading_side)
-}
-
-/// Barycentrics (f64) where the line `o + t d` crosses the plane of triangle `v`.
-pub fn barycentrics_f64(v: [Vec3; 3], o: Vec3, d: Vec3) -> [f64; 3] {
-    let f = |a: Vec3| [a.x as f64, a.y as f64, a.z as f64];
-    let (a, b, c, o, d) = (f(v[0]), f(v[1]), f(v[2]), f(o), f(d));
-    let sub = |x: [f64; 3], y: [f64; 3]| [x[0] - y[0], x[1] - y[1], x[2] - y[2]];
-    let cross =
-        |x: [f64; 3], y: [f64; 3]| [x[1] * y[2] - x[2] * y[1], x[2] * y[0] - x[0] * y[2], x[0] * y[1] - x[1] * y[0]];
-    let dot = |x: [f64; 3], y: [f64; 3]| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
-    let (e1, e2) = (sub(b, a), sub(c, a));
-    let p = cross(d, e2);
-    let det = dot(e1, p);
-    let s = sub(o, a);
-    let u = dot(s, p) / det;
-    let q = cross(s, e1);
-    let w = dot(d, q) / det;
-    [1.0 - u - w, u, w]
-}
-
-/// True when a blocked shadow ray of `n` or its children is fragile (see [`Class::ShadowEdge`]).
-pub fn has_shadow_edge(scene: &Scene, n: &RayNode) -> bool {
-    let near_edge = n.lights.iter().flat_map(|l| &l.shadow_rays).any(|s| match s.blocked_by {
-        Some((prim, _)) if (prim as usize) < scene.prims.triangles.len() => {
-            let v = scene.prims.triangles[prim as usize].v;
-            let (o, t) = (Vec3::from(s.origin), Vec3::from(s.target));
-            let b = barycentrics_f64(v, o, t - o);
-            b.iter().copied().fold(f64::INFINITY, f64::min) < 1e-4
-        }
-        _ => false,
-    });
-    near_edge || n.children.iter().any(|c| has_shadow_edge(scene, c))
 }
 
 /// Result of the deterministic check.
@@ -183,14 +122,6 @@ impl Class {
     pub fn is_convention(self) -> bool {
         matches!(self, Class::SpawnOffset | Class::ShadingSide)
     }
-}
-
-/// Relative difference of two pixels (largest over the channels), with [`FLOOR`] as the
-/// smallest scale.
-pub fn rel(a: Vec3, b: Vec3) -> f32 {
-    let d = (a - b).abs();
-    let s = a.abs().max(b.abs()).max(Vec3::splat(FLOOR));
-    (d / s).max_element()
 }
 
 /// The deterministic check of `img` against `reference` (both of `scene`), every pixel over
@@ -238,32 +169,6 @@ pub fn summary(e: &Exact) -> String {
         *counts.entry(format!("{:?}", b.3)).or_insert(0) += 1;
     }
     format!("{:.4}% agree (max rel {:.2e}), disagreeing {:?}", 100.0 * e.agreeing, e.max_rel, counts)
-}
-
-/// Below this, a pixel-channel is black on both sides whatever its noise: the
-/// deterministic check's absolute tolerance (`REL_TOL * FLOOR` = 1e-5, 30x below
-/// the darkest non-zero 8-bit sRGB step, 3.0e-4).
-pub const BLACK: f64 = (REL_TOL * FLOOR) as f64;
-
-/// Pixel-channels whose mean and standard deviation are below [`BLACK`] on both
-/// sides become deterministic (variance 0), so the Welch test's exact tolerance
-/// (1e-5) judges them. Where an area light lies in the plane of a face (the cube's
-/// segment light runs along its top face, y = 0.5), n.l is exactly 0 in the model
-/// and the float32 rounding of the hit point (p.y = 0.5 +- 1 ulp) in either
-/// renderer: with the physical model's 1 / r^2 at r ~ 0.05, the top face shows
-/// 1e-6..3e-6 in one renderer and 0 in the other, t ~ 10-20 for a difference no
-/// image can show (measured: all 8-10 rejections of cube.physical with K = 16 / 8,
-/// and the only ones with 400 / 1200 seeds).
-pub fn numerically_black(a: &mut Moments, b: &mut Moments) {
-    for i in 0..a.mean.len() {
-        for c in 0..3 {
-            let black = |m: &Moments| m.mean[i][c].abs() < BLACK && m.variance[i][c].sqrt() < BLACK;
-            if black(a) && black(b) {
-                a.variance[i][c] = 0.0;
-                b.variance[i][c] = 0.0;
-            }
-        }
-    }
 }
 
 /// One line of a Welch report.

@@ -158,7 +158,9 @@ pub fn classify(scene: &Scene, tracer: &dyn Tracer, x: u32, y: u32) -> PixelClas
     PixelClass::Unexplained
 }
 
-fn has_terminator(scene: &Scene, n: &RayNode) -> bool {
+/// True when a light sample of `n` or of its children is on opposite sides of the shading and
+/// geometric normals, or grazes the geometric plane (within 1.5 degrees).
+pub fn has_terminator(scene: &Scene, n: &RayNode) -> bool {
     if let Some(h) = &n.hit {
         let p = Vec3::from(h.position);
         let ns = Vec3::from(h.normal);
@@ -182,7 +184,7 @@ fn has_terminator(scene: &Scene, n: &RayNode) -> bool {
 }
 
 /// Barycentrics (f64) where the line `o + t d` crosses the plane of triangle `v`.
-fn barycentrics_f64(v: [Vec3; 3], o: Vec3, d: Vec3) -> [f64; 3] {
+pub fn barycentrics_f64(v: [Vec3; 3], o: Vec3, d: Vec3) -> [f64; 3] {
     let [a, b, c] = v.map(|p| p.as_dvec3());
     let (o, d) = (o.as_dvec3(), d.as_dvec3());
     let (e1, e2) = (b - a, c - a);
@@ -194,7 +196,9 @@ fn barycentrics_f64(v: [Vec3; 3], o: Vec3, d: Vec3) -> [f64; 3] {
     [1.0 - u - w, u, w]
 }
 
-fn has_shadow_edge(scene: &Scene, n: &RayNode) -> bool {
+/// True when a blocked shadow ray of `n` or its children is fragile: the blocker is hit within
+/// 1e-4 (barycentric) of one of its edges.
+pub fn has_shadow_edge(scene: &Scene, n: &RayNode) -> bool {
     let near_edge = n.lights.iter().flat_map(|l| &l.shadow_rays).any(|s| match s.blocked_by {
         Some((prim, _)) if (prim as usize) < scene.prims.triangles.len() => {
             let v = scene.prims.triangles[prim as usize].v;
@@ -221,7 +225,9 @@ pub struct ExactCheck {
     pub passed: bool,
 }
 
-fn rel(a: Vec3, b: Vec3) -> f32 {
+/// Relative difference of two pixels (largest over the channels), with [`FLOOR`] as the
+/// smallest scale.
+pub fn rel(a: Vec3, b: Vec3) -> f32 {
     let d = (a - b).abs();
     let s = a.abs().max(b.abs()).max(Vec3::splat(FLOOR));
     (d / s).max_element()
@@ -271,13 +277,13 @@ pub fn noisy_check(r: &ReferenceEntry, images: &[Image]) -> Result<WelchReport> 
 
 /// Below this a pixel-channel is black on both sides whatever its noise: the deterministic
 /// check's absolute tolerance (`REL_TOL * FLOOR`, 30x below the darkest non-zero 8-bit step).
-const BLACK: f64 = (REL_TOL * FLOOR) as f64;
+pub const BLACK: f64 = (REL_TOL * FLOOR) as f64;
 
 /// Pixel-channels whose mean and standard deviation are below [`BLACK`] on both sides become
 /// deterministic (variance 0), so the Welch test's exact tolerance judges them: where a light
 /// lies in the plane of a face, n.l is exactly 0 in the model and the float32 rounding of the
 /// hit point gives either renderer 1e-6 where the other has 0 (tests/mitsuba_reference.rs).
-fn numerically_black(a: &mut Moments, b: &mut Moments) {
+pub fn numerically_black(a: &mut Moments, b: &mut Moments) {
     for i in 0..a.mean.len().min(b.mean.len()) {
         for c in 0..3 {
             let black = |m: &Moments| m.mean[i][c].abs() < BLACK && m.variance[i][c].sqrt() < BLACK;
