@@ -53,7 +53,7 @@ pub struct Campaign {
 }
 
 /// A tracer's verdict on one set: `agree` (every hit the reference's, distances and
-/// barycentrics within bounds), `N judged, all right` (N disagreements, the tracer exact or
+/// barycentrics within bounds), `N ok` (N disagreements, the tracer exact or
 /// within its rounding bound on each), `N judged, W wrong (class n, ...)` (the tracer beyond
 /// the bound on W, by class), with `, L leaks` when there are any. Distances and barycentrics
 /// beyond their bounds on the same primitive count as judged: the arbiter's exact hit decides.
@@ -63,7 +63,7 @@ pub fn verdict(t: &super::item::TracerParity) -> String {
     let mut s = if t.disagreements == 0 && beyond == 0 && t.wrong == 0 {
         "agree".to_string()
     } else if t.wrong == 0 && t.judged == t.disagreements {
-        format!("{judged} judged, all right")
+        format!("{judged} ok")
     } else {
         let by: Vec<String> = t.wrong_by.iter().map(|(k, n)| format!("{k} {n}")).collect();
         let by = if by.is_empty() { String::new() } else { format!(" ({})", by.join(", ")) };

@@ -107,9 +107,10 @@ pub fn tables(c: &Campaign, timings: bool) -> Vec<(String, Table)> {
         })
         .collect();
     let mut notes = vec![format!(
-        "Parity against {}: `agree` (every closest hit the reference's, within the error bounds), `N judged, all right` \
-         (N disagreements, each judged by the exact arbiter: the tracer exact or within its rounding bound), `N judged, W \
-         wrong` (the tracer beyond the bound on W rays). Tracers: {}.",
+        "Parity against {}: `agree` (every closest hit the reference's, within the error bounds), `N ok` (N rays \
+         differ from the reference, and the exact arbiter finds the tracer exact or within its rounding bound on each), \
+         `N judged, W wrong (class n, ...)` (the tracer beyond the bound on W of them), `, L leaks` (rays through a \
+         shared edge or vertex). Tracers: {}.",
         s.reference,
         tracers.join(", ")
     )];
@@ -243,11 +244,17 @@ pub fn tables(c: &Campaign, timings: bool) -> Vec<(String, Table)> {
     out
 }
 
-/// The report as Markdown.
+/// The report as Markdown: the tables of the HTML page but the per-tracer speed table (a
+/// row per input and tracer; the inputs table has each tracer's speed over the reference's),
+/// which stays in `index.html` and `campaign.json`, so that a corpus report stays readable.
 pub fn markdown(c: &Campaign, timings: bool, command: &str) -> String {
     let name = &c.manifest.settings.name;
     let mut o = format!("# Campaign {}\n\n`{command}`\n\n", if name.is_empty() { "(unnamed)" } else { name });
-    for (_, t) in tables(c, timings) {
+    for (id, t) in tables(c, timings) {
+        if id == "speed" {
+            o.push_str("Build times and throughputs per input and tracer: the Speed table of `index.html` and `campaign.json`.\n\n");
+            continue;
+        }
         o.push_str(&t.to_markdown());
         o.push('\n');
     }
