@@ -263,13 +263,11 @@ pub fn intersect_watertight_f64(
     let o = ray.origin.as_dvec3();
     let d = ray.dir.as_dvec3();
     let (sx, sy, sz) = (d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
-    let shear = |p: Vec3| {
-        let q = p.as_dvec3() - o;
-        (q[kx] - sx * q[kz], q[ky] - sy * q[kz], sz * q[kz])
-    };
-    let (ax, ay, az) = shear(v0);
-    let (bx, by, bz) = shear(v1);
-    let (cx, cy, cz) = shear(v2);
+    let (qa, qb, qc) = (v0.as_dvec3() - o, v1.as_dvec3() - o, v2.as_dvec3() - o);
+    let shear = |q: glam::DVec3| (q[kx] - sx * q[kz], q[ky] - sy * q[kz], sz * q[kz]);
+    let (ax, ay, az) = shear(qa);
+    let (bx, by, bz) = shear(qb);
+    let (cx, cy, cz) = shear(qc);
     let e0 = cx * by - cy * bx;
     let e1 = ax * cy - ay * cx;
     let e2 = bx * ay - by * ax;
@@ -285,18 +283,29 @@ pub fn intersect_watertight_f64(
     if !(t32 >= ray.t_min && t32 <= ray.t_max) {
         return None;
     }
-    // The provably-positive-t check of the single-precision test, with
-    // double-precision gammas (pbrt-v4 6.8.7).
+    // The provably-positive-t check of the single-precision test (pbrt-v4
+    // 6.8.7) with double-precision gammas, and with the shear's rounding
+    // bounded by the shear itself: pbrt bounds the error of `q_x - s_x q_z`
+    // by `gamma(5) (|x'| + |z'|)`, which for a ray with a zero direction
+    // component (`s_x = 0`, no shear and no rounding) across a triangle thin
+    // in `x` exceeds the edge functions by orders of magnitude and made this
+    // check refuse true hits far from any tie (corpus: a mesh 1e-30 thick hit
+    // by axis-aligned rays, docs/campaigns.md). Here the error of the sheared
+    // `x` is `gamma(5) (|q_x| + |s_x q_z|)`, valid for any direction's scale.
+    // `eta` covers a product's absolute rounding should it underflow.
     let g = |n: f64| n * f64::EPSILON * 0.5 / (1.0 - n * f64::EPSILON * 0.5);
+    let eta = f64::from_bits(1); // 2^-1074, the least positive f64
+    let max_q = |k: usize| qa[k].abs().max(qb[k].abs()).max(qc[k].abs());
     let max_xt = ax.abs().max(bx.abs()).max(cx.abs());
     let max_yt = ay.abs().max(by.abs()).max(cy.abs());
     let max_zt = az.abs().max(bz.abs()).max(cz.abs());
-    let delta_z = g(3.0) * max_zt;
-    let delta_x = g(5.0) * (max_xt + max_zt);
-    let delta_y = g(5.0) * (max_yt + max_zt);
-    let delta_e = 2.0 * (g(2.0) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+    let (max_qx, max_qy, max_qz) = (max_q(kx), max_q(ky), max_q(kz));
+    let delta_z = g(3.0) * max_zt + eta;
+    let delta_x = g(5.0) * (max_qx + sx.abs() * max_qz) + eta;
+    let delta_y = g(5.0) * (max_qy + sy.abs() * max_qz) + eta;
+    let delta_e = 2.0 * (g(2.0) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt) + 4.0 * eta;
     let max_e = e0.abs().max(e1.abs()).max(e2.abs());
-    let t_err = 3.0 * (g(3.0) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) / det.abs();
+    let t_err = 3.0 * (g(3.0) * max_e * max_zt + delta_e * max_zt + delta_z * max_e + 4.0 * eta) / det.abs();
     if t <= t_err {
         return None;
     }
