@@ -4,7 +4,8 @@
 //! Both report `t` and the barycentric weights `(u, v)` of vertices 1 and 2,
 //! the convention Embree uses. Neither uses an absolute epsilon. The
 //! watertight test trusts a single-precision edge function's sign only when it
-//! exceeds twice its error bound ([`watertight_e_error`]); otherwise the whole
+//! exceeds twice its error bound ([`watertight_e_error`]) and the underflow
+//! floor [`E_FLOOR`]; otherwise the whole
 //! triangle is decided in double precision from the float32 inputs
 //! ([`intersect_watertight_f64`]), so its hit/miss decisions are those of the
 //! exact arithmetic of `verify::hits::arbiter` except within about `2^-29` of
@@ -185,10 +186,12 @@ pub fn intersect_watertight(ray: &Ray, wr: &WatertightRay, v0: Vec3, v1: Vec3, v
     let max_xt = ax.abs().max(bx.abs()).max(cx.abs());
     let max_yt = ay.abs().max(by.abs()).max(cy.abs());
     let max_zt = az.abs().max(bz.abs()).max(cz.abs());
-    if e0.abs().min(e1.abs()).min(e2.abs()) <= SIGN_MARGIN * watertight_e_error(max_xt, max_yt, max_zt) {
+    let min_e = e0.abs().min(e1.abs()).min(e2.abs());
+    if min_e <= SIGN_MARGIN * watertight_e_error(max_xt, max_yt, max_zt) || min_e <= E_FLOOR {
         // Some edge function's single-precision sign is not certain (it is
-        // within its rounding error of 0): decide the triangle in double
-        // precision from the original vertices (module docs).
+        // within its rounding error of 0, or so small that products underflow):
+        // decide the triangle in double precision from the original vertices
+        // (module docs).
         return intersect_watertight_f64(ray, wr, v0, v1, v2);
     }
     if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
@@ -220,6 +223,26 @@ pub fn intersect_watertight(ray: &Ray, wr: &WatertightRay, v0: Vec3, v1: Vec3, v
 /// bounds), and a neighbour deciding the shared edge in double precision
 /// finds the same sign (watertightness).
 pub const SIGN_MARGIN: f32 = 2.0;
+
+/// The least edge-function magnitude whose single-precision sign the
+/// watertight test trusts, whatever its error bound: `2^-100`. The bounds of
+/// [`watertight_e_error`] and [`watertight_t_error`] are relative to the
+/// magnitudes of the operands and assume no product underflows; below
+/// `2^-126` a product rounds to a multiple of `2^-149` (and the bounds
+/// themselves to 0), so for a mesh scaled to 1e-17 .. 1e-22 (ray origins as
+/// near) the edge functions and `det` fell into the subnormals, `1 / det`
+/// overflowed to infinity and `t` came out NaN or 0: true hits were lost far
+/// from any tie (`tests/tiny_scale.rs`). An edge function above this floor keeps an underflowed
+/// operand's absolute error (`2^-150`, times coordinates up to `2^48`) below
+/// half of it, and `1 / det` finite; smaller ones go to the double-precision
+/// fallback, whose range reaches `2^-1074`.
+pub const E_FLOOR: f32 = 1.0 / (1u128 << 100) as f32;
+
+/// Absolute term of the watertight test's `t` error bound
+/// ([`watertight_t_error`]): `2^-126`, covering the rounding of the products
+/// `e_i z_i` should they underflow (at most `2^-150` each), which the bound's
+/// relative terms (underflowing with them) do not.
+pub const T_ETA: f32 = f32::MIN_POSITIVE;
 
 /// Bound on the absolute error of the watertight test's single-precision
 /// edge functions (pbrt-v4, section 6.8.7: `delta_e`), from the largest
@@ -324,7 +347,7 @@ pub fn watertight_t_error(a: [f32; 3], b: [f32; 3], c: [f32; 3], e: [f32; 3], in
     let delta_z = gamma(3) * max_zt;
     let delta_e = watertight_e_error(max_xt, max_yt, max_zt);
     let max_e = e[0].abs().max(e[1].abs()).max(e[2].abs());
-    3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs()
+    3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e + T_ETA) * inv_det.abs()
 }
 
 /// The watertight test's `t` error bound for `ray` and triangle `(v0, v1, v2)`
