@@ -2,8 +2,8 @@
 //! brings from Debian, npm, PyPI and crates.io, and the project's own) in CI as one small
 //! shard, 16/16 (about 180 of its 1,960 items, 20 s here): every item runs; a mesh that does
 //! not load says why, naming its file; rtdiff's default tracer holds parity with Embree (the
-//! exact arbiter finds it wrong on no ray, no leak) except the one finding pinned below; and the
-//! triangle counts and load results agree with the full run's report in docs/corpus-report.md.
+//! exact arbiter finds it wrong on no ray, no leak); and the triangle counts and load results
+//! agree with the full run's report in docs/corpus-report.md.
 
 #![cfg(feature = "embree")]
 
@@ -12,12 +12,6 @@ mod common;
 use std::process::Command;
 
 use rtdiff::campaign::Campaign;
-
-/// The only place the arbiter finds rtdiff wrong in the full corpus run: a binary STL of
-/// npm stl-models mangled by a UTF-8 conversion (bytes >= 0x80 became U+FFFD, so its
-/// coordinates run from 1e-41 to 1e28); on axis-aligned rays rtdiff misses triangles Embree
-/// hits, far from any rounding tie (docs/campaigns.md, findings).
-const KNOWN_WRONG: (&str, &str) = ("assets/corpus/npm-stl-models/misc/multiWordName.bin.stl", "axis");
 
 #[test]
 fn the_corpus_ci_shard_runs_and_rtdiff_holds_parity_with_embree() {
@@ -70,13 +64,7 @@ fn the_corpus_ci_shard_runs_and_rtdiff_holds_parity_with_embree() {
             for t in &s.tracers {
                 let at = format!("{input}, set {}, {}", s.set, t.tracer);
                 assert_eq!(t.leaks, 0, "{at}");
-                if (input.as_str(), r.item.set.as_deref().unwrap_or("")) != KNOWN_WRONG {
-                    assert_eq!(
-                        t.wrong, 0,
-                        "{at}: the arbiter finds rtdiff wrong ({:?}): {:#?}",
-                        t.wrong_by, t.disputes
-                    );
-                }
+                assert_eq!(t.wrong, 0, "{at}: the arbiter finds rtdiff wrong ({:?}): {:#?}", t.wrong_by, t.disputes);
             }
         }
     }

@@ -15,7 +15,7 @@
 use glam::Vec3;
 
 use crate::geometry::offset::gamma;
-use crate::geometry::triangle::{SIGN_MARGIN, TriangleKernel, WatertightRay};
+use crate::geometry::triangle::{E_FLOOR, SIGN_MARGIN, T_ETA, TriangleKernel, WatertightRay};
 use crate::geometry::{Hit, Ray};
 
 use super::prims::{LeafPrims, watertight};
@@ -362,7 +362,8 @@ macro_rules! watertight_lanes {
         // Lanes with an edge function within SIGN_MARGIN bounds of 0 (or a
         // NaN bound or minimum): uncertain sign, decided by the scalar routine.
         let min_e = $min($min(abs(e0), abs(e1)), abs(e2));
-        let uncertain = $ngt(min_e, $mul($set1(SIGN_MARGIN), delta_e));
+        // `E_FLOOR` first: `max` passes a NaN bound on (its second operand).
+        let uncertain = $ngt(min_e, $max($set1(E_FLOOR), $mul($set1(SIGN_MARGIN), delta_e)));
         // In the other lanes, if no edge function is NaN, `min_e` is their
         // least magnitude and exceeds a bound >= 0, so all are nonzero and
         // "some negative and some positive" is "the sign bits differ"; a NaN
@@ -388,7 +389,13 @@ macro_rules! watertight_lanes {
         let delta_z = $mul(g3, max_zt);
         let max_e = max3(e0, e1, e2);
         let t_err = $mul(
-            $mul($set1(3.0), $add($add($mul($mul(g3, max_e), max_zt), $mul(delta_e, max_zt)), $mul(delta_z, max_e))),
+            $mul(
+                $set1(3.0),
+                $add(
+                    $add($add($mul($mul(g3, max_e), max_zt), $mul(delta_e, max_zt)), $mul(delta_z, max_e)),
+                    $set1(T_ETA),
+                ),
+            ),
             abs(inv_det),
         );
         // Lanes whose distance is not provably positive go to the scalar routine too.

@@ -27,7 +27,7 @@
 use std::mem::MaybeUninit;
 
 use crate::geometry::offset::gamma;
-use crate::geometry::triangle::{SIGN_MARGIN, TriangleKernel};
+use crate::geometry::triangle::{E_FLOOR, SIGN_MARGIN, T_ETA, TriangleKernel};
 use crate::geometry::{Hit, Ray};
 
 use super::packet::LeafRay;
@@ -445,9 +445,11 @@ unsafe fn tri_x8(
             ),
         );
         let min_e = _mm256_min_ps(_mm256_min_ps(abs(e0), abs(e1)), abs(e2));
-        // Uncertain: an edge function within SIGN_MARGIN bounds of 0, or a
-        // NaN bound or minimum (unordered compares true).
-        let uncertain = _mm256_cmp_ps::<_CMP_NGT_US>(min_e, _mm256_mul_ps(_mm256_set1_ps(SIGN_MARGIN), delta_e));
+        // Uncertain: an edge function within SIGN_MARGIN bounds or `E_FLOOR`
+        // of 0, or a NaN bound or minimum (unordered compares true; `max`
+        // passes a NaN bound on, its second operand).
+        let bound = _mm256_max_ps(_mm256_set1_ps(E_FLOOR), _mm256_mul_ps(_mm256_set1_ps(SIGN_MARGIN), delta_e));
+        let uncertain = _mm256_cmp_ps::<_CMP_NGT_US>(min_e, bound);
         // Elsewhere, with no NaN edge function, all are nonzero: "some
         // negative and some positive" is "the sign bits differ"; a NaN one
         // makes t NaN, never in range (see `packet::tri4_sse`).
@@ -472,8 +474,11 @@ unsafe fn tri_x8(
             _mm256_mul_ps(
                 _mm256_set1_ps(3.0),
                 _mm256_add_ps(
-                    _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(g3, max_e), max_zt), _mm256_mul_ps(delta_e, max_zt)),
-                    _mm256_mul_ps(delta_z, max_e),
+                    _mm256_add_ps(
+                        _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(g3, max_e), max_zt), _mm256_mul_ps(delta_e, max_zt)),
+                        _mm256_mul_ps(delta_z, max_e),
+                    ),
+                    _mm256_set1_ps(T_ETA),
                 ),
             ),
             abs(inv_det),

@@ -4,7 +4,8 @@
 //! Both report `t` and the barycentric weights `(u, v)` of vertices 1 and 2,
 //! the convention Embree uses. Neither uses an absolute epsilon. The
 //! watertight test trusts a single-precision edge function's sign only when it
-//! exceeds twice its error bound ([`watertight_e_error`]); otherwise the whole
+//! exceeds twice its error bound ([`watertight_e_error`]) and the underflow
+//! floor [`E_FLOOR`]; otherwise the whole
 //! triangle is decided in double precision from the float32 inputs
 //! ([`intersect_watertight_f64`]), so its hit/miss decisions are those of the
 //! exact arithmetic of `verify::hits::arbiter` except within about `2^-29` of
@@ -185,10 +186,12 @@ pub fn intersect_watertight(ray: &Ray, wr: &WatertightRay, v0: Vec3, v1: Vec3, v
     let max_xt = ax.abs().max(bx.abs()).max(cx.abs());
     let max_yt = ay.abs().max(by.abs()).max(cy.abs());
     let max_zt = az.abs().max(bz.abs()).max(cz.abs());
-    if e0.abs().min(e1.abs()).min(e2.abs()) <= SIGN_MARGIN * watertight_e_error(max_xt, max_yt, max_zt) {
+    let min_e = e0.abs().min(e1.abs()).min(e2.abs());
+    if min_e <= SIGN_MARGIN * watertight_e_error(max_xt, max_yt, max_zt) || min_e <= E_FLOOR {
         // Some edge function's single-precision sign is not certain (it is
-        // within its rounding error of 0): decide the triangle in double
-        // precision from the original vertices (module docs).
+        // within its rounding error of 0, or so small that products underflow):
+        // decide the triangle in double precision from the original vertices
+        // (module docs).
         return intersect_watertight_f64(ray, wr, v0, v1, v2);
     }
     if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
@@ -220,6 +223,26 @@ pub fn intersect_watertight(ray: &Ray, wr: &WatertightRay, v0: Vec3, v1: Vec3, v
 /// bounds), and a neighbour deciding the shared edge in double precision
 /// finds the same sign (watertightness).
 pub const SIGN_MARGIN: f32 = 2.0;
+
+/// The least edge-function magnitude whose single-precision sign the
+/// watertight test trusts, whatever its error bound: `2^-100`. The bounds of
+/// [`watertight_e_error`] and [`watertight_t_error`] are relative to the
+/// magnitudes of the operands and assume no product underflows; below
+/// `2^-126` a product rounds to a multiple of `2^-149` (and the bounds
+/// themselves to 0), so for a mesh scaled to 1e-17 .. 1e-22 (ray origins as
+/// near) the edge functions and `det` fell into the subnormals, `1 / det`
+/// overflowed to infinity and `t` came out NaN or 0: true hits were lost far
+/// from any tie (`tests/tiny_scale.rs`). An edge function above this floor keeps an underflowed
+/// operand's absolute error (`2^-150`, times coordinates up to `2^48`) below
+/// half of it, and `1 / det` finite; smaller ones go to the double-precision
+/// fallback, whose range reaches `2^-1074`.
+pub const E_FLOOR: f32 = 1.0 / (1u128 << 100) as f32;
+
+/// Absolute term of the watertight test's `t` error bound
+/// ([`watertight_t_error`]): `2^-126`, covering the rounding of the products
+/// `e_i z_i` should they underflow (at most `2^-150` each), which the bound's
+/// relative terms (underflowing with them) do not.
+pub const T_ETA: f32 = f32::MIN_POSITIVE;
 
 /// Bound on the absolute error of the watertight test's single-precision
 /// edge functions (pbrt-v4, section 6.8.7: `delta_e`), from the largest
@@ -263,13 +286,11 @@ pub fn intersect_watertight_f64(
     let o = ray.origin.as_dvec3();
     let d = ray.dir.as_dvec3();
     let (sx, sy, sz) = (d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
-    let shear = |p: Vec3| {
-        let q = p.as_dvec3() - o;
-        (q[kx] - sx * q[kz], q[ky] - sy * q[kz], sz * q[kz])
-    };
-    let (ax, ay, az) = shear(v0);
-    let (bx, by, bz) = shear(v1);
-    let (cx, cy, cz) = shear(v2);
+    let (qa, qb, qc) = (v0.as_dvec3() - o, v1.as_dvec3() - o, v2.as_dvec3() - o);
+    let shear = |q: glam::DVec3| (q[kx] - sx * q[kz], q[ky] - sy * q[kz], sz * q[kz]);
+    let (ax, ay, az) = shear(qa);
+    let (bx, by, bz) = shear(qb);
+    let (cx, cy, cz) = shear(qc);
     let e0 = cx * by - cy * bx;
     let e1 = ax * cy - ay * cx;
     let e2 = bx * ay - by * ax;
@@ -285,18 +306,29 @@ pub fn intersect_watertight_f64(
     if !(t32 >= ray.t_min && t32 <= ray.t_max) {
         return None;
     }
-    // The provably-positive-t check of the single-precision test, with
-    // double-precision gammas (pbrt-v4 6.8.7).
+    // The provably-positive-t check of the single-precision test (pbrt-v4
+    // 6.8.7) with double-precision gammas, and with the shear's rounding
+    // bounded by the shear itself: pbrt bounds the error of `q_x - s_x q_z`
+    // by `gamma(5) (|x'| + |z'|)`, which for a ray with a zero direction
+    // component (`s_x = 0`, no shear and no rounding) across a triangle thin
+    // in `x` exceeds the edge functions by orders of magnitude and made this
+    // check refuse true hits far from any tie (corpus: a mesh 1e-30 thick hit
+    // by axis-aligned rays, docs/campaigns.md). Here the error of the sheared
+    // `x` is `gamma(5) (|q_x| + |s_x q_z|)`, valid for any direction's scale.
+    // `eta` covers a product's absolute rounding should it underflow.
     let g = |n: f64| n * f64::EPSILON * 0.5 / (1.0 - n * f64::EPSILON * 0.5);
+    let eta = f64::from_bits(1); // 2^-1074, the least positive f64
+    let max_q = |k: usize| qa[k].abs().max(qb[k].abs()).max(qc[k].abs());
     let max_xt = ax.abs().max(bx.abs()).max(cx.abs());
     let max_yt = ay.abs().max(by.abs()).max(cy.abs());
     let max_zt = az.abs().max(bz.abs()).max(cz.abs());
-    let delta_z = g(3.0) * max_zt;
-    let delta_x = g(5.0) * (max_xt + max_zt);
-    let delta_y = g(5.0) * (max_yt + max_zt);
-    let delta_e = 2.0 * (g(2.0) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+    let (max_qx, max_qy, max_qz) = (max_q(kx), max_q(ky), max_q(kz));
+    let delta_z = g(3.0) * max_zt + eta;
+    let delta_x = g(5.0) * (max_qx + sx.abs() * max_qz) + eta;
+    let delta_y = g(5.0) * (max_qy + sy.abs() * max_qz) + eta;
+    let delta_e = 2.0 * (g(2.0) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt) + 4.0 * eta;
     let max_e = e0.abs().max(e1.abs()).max(e2.abs());
-    let t_err = 3.0 * (g(3.0) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) / det.abs();
+    let t_err = 3.0 * (g(3.0) * max_e * max_zt + delta_e * max_zt + delta_z * max_e + 4.0 * eta) / det.abs();
     if t <= t_err {
         return None;
     }
@@ -315,7 +347,7 @@ pub fn watertight_t_error(a: [f32; 3], b: [f32; 3], c: [f32; 3], e: [f32; 3], in
     let delta_z = gamma(3) * max_zt;
     let delta_e = watertight_e_error(max_xt, max_yt, max_zt);
     let max_e = e[0].abs().max(e[1].abs()).max(e[2].abs());
-    3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs()
+    3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e + T_ETA) * inv_det.abs()
 }
 
 /// The watertight test's `t` error bound for `ray` and triangle `(v0, v1, v2)`
