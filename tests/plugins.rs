@@ -32,6 +32,9 @@ fn c_plugin(flag: Option<&str>) -> PathBuf {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
     let dir = DIR.get_or_init(|| common::temp_dir("c-plugins"));
     let out = dir.join(format!("brute_{}.so", flag.unwrap_or("ok")));
+    // Tests run in parallel: one compiles at a time, so none loads a library another is writing.
+    static COMPILING: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _guard = COMPILING.lock().unwrap_or_else(|e| e.into_inner());
     if !out.exists() {
         let mut cmd = Command::new("cc");
         cmd.args(["-O2", "-std=c99", "-Wall", "-Werror", "-shared", "-fPIC", "-I"])

@@ -119,7 +119,7 @@ pub struct BeyondBound {
 
 /// True when `h`'s distance is within its bound (`bounds`, at `h`) of `exact`'s, and
 /// `(distance right, barycentrics right)` (barycentrics: triangles only).
-fn right_against(set: &RaySet, i: usize, h: &Hit, exact: &super::arbiter::Exact) -> (bool, bool) {
+pub(crate) fn right_against(set: &RaySet, i: usize, h: &Hit, exact: &super::arbiter::Exact) -> (bool, bool) {
     let ray = &set.rays[i];
     if exact.t.is_none() || !exact.t_f64.is_finite() {
         return (false, false);

@@ -167,7 +167,7 @@ pub fn judge(
                     Some(f) => {
                         Some(format!("wrong ({}): t {}, primitive {}, u {}, v {}", f.name(), h.t, h.prim, h.u, h.v))
                     }
-                    None => beyond_bound(&set, i, h, ref_hits[i].as_ref()),
+                    None => beyond_bound(&set, i, h, ref_hits[i].as_ref(), arbiter.then_some(&arb)),
                 },
                 None => None,
             };
@@ -213,24 +213,40 @@ pub fn judge(
     Ok((report, disputes))
 }
 
-/// Why a hit on the reference's primitive is wrong: its distance or barycentrics beyond their bounds.
-fn beyond_bound(set: &RaySet, i: usize, h: &Hit, r: Option<&Hit>) -> Option<String> {
+/// Why a hit on the reference's primitive differs: its distance or barycentrics beyond their
+/// bounds of the reference's, judged (with `arb`) against the exact hit on that primitive: wrong
+/// when beyond its own bound of the exact one, else the reference is the one off.
+fn beyond_bound(
+    set: &RaySet,
+    i: usize,
+    h: &Hit,
+    r: Option<&Hit>,
+    arb: Option<&super::arbiter::Arbiter>,
+) -> Option<String> {
     let r = r?;
-    if r.prim != h.prim {
+    if r.prim != h.prim || !super::classify::beyond_bounds(&set.prims, &set.rays[i], h, r) {
         return None;
     }
     let ray = &set.rays[i];
     let g = super::bounds::hit_geom(&set.prims, ray, r);
     let (tb, bb) = super::bounds::bounds(ray, r, &g);
-    let dt = (h.t as f64 - r.t as f64).abs();
-    let db = (h.u as f64 - r.u as f64).abs().max((h.v as f64 - r.v as f64).abs());
-    if dt > tb {
-        Some(format!("wrong (distance): t {} on primitive {}, reference t {} (bound {:.3e})", h.t, h.prim, r.t, tb))
-    } else if g.is_triangle && db > bb {
-        Some(format!("wrong (barycentrics): u {} v {}, reference u {} v {} (bound {:.3e})", h.u, h.v, r.u, r.v, bb))
+    let what = if (h.t as f64 - r.t as f64).abs() > tb {
+        format!("t {} on primitive {}, reference t {} (bound {:.3e})", h.t, h.prim, r.t, tb)
     } else {
-        None
-    }
+        format!("u {} v {}, reference u {} v {} (bound {:.3e})", h.u, h.v, r.u, r.v, bb)
+    };
+    let Some(arb) = arb else {
+        let class = if what.starts_with('t') { "distance" } else { "barycentrics" };
+        return Some(format!("wrong ({class}): {what}"));
+    };
+    let exact = arb.evaluate(ray, h.prim);
+    let (t_ok, b_ok) = super::arbitrate::right_against(set, i, h, &exact);
+    let truth = format!("exact t {:.9e}, u {:.9e}, v {:.9e}", exact.t_f64, exact.bary[1], exact.bary[2]);
+    Some(match (t_ok, b_ok) {
+        (true, true) => format!("within the bound of the exact hit (the reference is off): {what}; {truth}"),
+        (false, _) => format!("wrong (distance): {what}; {truth}"),
+        (true, false) => format!("wrong (barycentrics): {what}; {truth}"),
+    })
 }
 
 /// A ray as a line of a ray file.
