@@ -257,3 +257,44 @@ fn gltf_and_stl_files_render_and_hold_parity_against_embree() {
     }
     assert!(loaded >= 30, "only {loaded} of {} files loaded", files.len());
 }
+
+/// A glTF sampler's wrap modes reach the material: CLAMP_TO_EDGE (the authored cube), REPEAT
+/// (the default), MIRRORED_REPEAT; S and T that differ are named in a warning where the uvs
+/// leave [0, 1].
+#[test]
+fn gltf_sampler_wrap_modes_reach_the_material() {
+    use rtdiff::texture::WrapMode;
+    let d = common::temp_dir("gltf-wrap");
+    let base: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(authored("cube_textured.gltf")).unwrap()).unwrap();
+    for f in std::fs::read_dir(common::root().join("scenes/meshes")).unwrap().flatten() {
+        // The buffers and images the authored file refers to.
+        let name = f.file_name().to_string_lossy().into_owned();
+        if name.starts_with("cube_textured") && !name.ends_with(".gltf") || name.ends_with(".png") {
+            std::fs::copy(f.path(), d.join(&name)).unwrap();
+        }
+    }
+    let wrap = |s: Option<u32>, t: Option<u32>| {
+        let mut doc = base.clone();
+        let sampler = &mut doc["samplers"][0];
+        let o = sampler.as_object_mut().unwrap();
+        o.remove("wrapS");
+        o.remove("wrapT");
+        if let Some(s) = s {
+            o.insert("wrapS".into(), s.into());
+        }
+        if let Some(t) = t {
+            o.insert("wrapT".into(), t.into());
+        }
+        let p = common::write(&d, &format!("w_{s:?}_{t:?}.gltf"), &doc.to_string());
+        let m = load_mesh(&p, Content::WithMaterials).unwrap_or_else(|e| panic!("{e}"));
+        (m.materials[0].map_kd_wrap, m.warnings)
+    };
+    assert_eq!(wrap(Some(33071), Some(33071)).0, WrapMode::Clamp);
+    assert_eq!(wrap(None, None).0, WrapMode::Repeat);
+    assert_eq!(wrap(Some(33648), Some(33648)).0, WrapMode::Mirror);
+    let (mode, warnings) = wrap(Some(10497), Some(33071));
+    assert_eq!(mode, WrapMode::Repeat);
+    // The authored cube's uvs stay in [0, 1]: nothing to warn about.
+    assert!(warnings.iter().all(|w| !w.contains("wrap modes")), "{warnings:?}");
+}

@@ -250,22 +250,26 @@ impl Reader<'_> {
         Ok(())
     }
 
-    /// rtdiff clamps texture coordinates to [0, 1]; a glTF sampler may repeat or mirror
-    /// them. Say so (once per material) where a textured primitive's coordinates leave [0, 1].
+    /// rtdiff wraps a texture the same way along u and v (Mitsuba's `bitmap` does too); a glTF
+    /// sampler may wrap S and T differently. Say so (once per material) where a textured
+    /// primitive's coordinates leave [0, 1], where the difference shows; S's mode is used.
     fn warn_wrap(&mut self, m: &gltf::Material, uvs: &[Vec2]) {
-        use gltf::texture::WrappingMode::ClampToEdge;
         let Some(info) = m.pbr_metallic_roughness().base_color_texture() else { return };
         let s = info.texture().sampler();
-        let clamped = s.wrap_s() == ClampToEdge && s.wrap_t() == ClampToEdge;
+        if wrap_mode(s.wrap_s()) == wrap_mode(s.wrap_t()) {
+            return;
+        }
         let outside = uvs.iter().any(|t| t.x < 0.0 || t.x > 1.0 || t.y < 0.0 || t.y > 1.0);
         let name = m.name().map_or_else(|| format!("materials[{}]", m.index().unwrap_or(0)), str::to_string);
         let warning = format!(
-            "{}: material '{name}': texture coordinates outside [0, 1] with wrap modes {:?}/{:?}; rtdiff clamps them",
+            "{}: material '{name}': texture coordinates outside [0, 1] with wrap modes {:?} (S) and {:?} (T); rtdiff \
+             wraps both as {}",
             self.path.display(),
             s.wrap_s(),
-            s.wrap_t()
+            s.wrap_t(),
+            wrap_mode(s.wrap_s()).name()
         );
-        if !clamped && outside && !self.mesh.warnings.contains(&warning) {
+        if outside && !self.mesh.warnings.contains(&warning) {
             self.mesh.warnings.push(warning);
         }
     }
@@ -289,6 +293,7 @@ impl Reader<'_> {
             ..Default::default()
         };
         if let Some(info) = pbr.base_color_texture() {
+            out.map_kd_wrap = wrap_mode(info.texture().sampler().wrap_s());
             if info.tex_coord() != 0 {
                 self.mesh.warnings.push(format!(
                     "{}: material '{}': the base colour texture uses TEXCOORD_{}; rtdiff reads TEXCOORD_0 only",
@@ -616,6 +621,17 @@ fn strip_position(e: &serde_json::Error) -> String {
     match s.rfind(" at line ") {
         Some(i) => s[..i].to_string(),
         None => s,
+    }
+}
+
+/// rtdiff's wrap mode for a glTF sampler's (REPEAT, the glTF default, MIRRORED_REPEAT, CLAMP_TO_EDGE).
+fn wrap_mode(w: gltf::texture::WrappingMode) -> crate::texture::WrapMode {
+    use crate::texture::WrapMode;
+    use gltf::texture::WrappingMode;
+    match w {
+        WrappingMode::Repeat => WrapMode::Repeat,
+        WrappingMode::MirroredRepeat => WrapMode::Mirror,
+        WrappingMode::ClampToEdge => WrapMode::Clamp,
     }
 }
 

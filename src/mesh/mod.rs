@@ -128,8 +128,9 @@ pub struct MtlMaterial {
     pub map_kd: Option<PathBuf>,
     /// Where `map_kd` was written, when it came from an MTL file.
     pub map_kd_source: Option<TextureSource>,
-    /// `map_Kd -clamp on`: the texture clamps outside uv [0, 1] (it repeats otherwise).
-    pub map_kd_clamp: bool,
+    /// How the texture addresses uvs outside [0, 1]: MTL `map_Kd -clamp on` clamps (it repeats
+    /// otherwise); a glTF sampler's wrap mode.
+    pub map_kd_wrap: crate::texture::WrapMode,
     /// A diffuse texture held in the mesh file itself (a glTF data URI or buffer view).
     pub map_kd_embedded: Option<EmbeddedImage>,
     /// A colour the texture's texels are multiplied by (glTF's base colour factor; an MTL's

@@ -259,7 +259,11 @@ pub(crate) fn convert(m: tobj::Material, mtl: &Path, source: Option<&(usize, Str
         ks: m.specular.map(Vec3::from),
         ns: m.shininess,
         opacity,
-        map_kd_clamp: source.is_some_and(|(_, written)| texture_clamp(written)),
+        map_kd_wrap: if source.is_some_and(|(_, written)| texture_clamp(written)) {
+            crate::texture::WrapMode::Clamp
+        } else {
+            crate::texture::WrapMode::Repeat
+        },
         map_kd,
         map_kd_source,
         ..Default::default()
@@ -296,7 +300,7 @@ mod tests {
         assert!(!texture_clamp("-clamp"));
         let (lib, _) = parse_str("newmtl a\nmap_Kd -clamp on t.png\n");
         let m = convert(lib.materials[0].clone(), Path::new("m.mtl"), lib.map_kd.get("a"));
-        assert!(m.map_kd_clamp);
+        assert_eq!(m.map_kd_wrap, crate::texture::WrapMode::Clamp);
         assert!(m.map_kd.unwrap().ends_with("t.png"));
     }
 

@@ -12,7 +12,7 @@ use crate::error::{Error, Result};
 use crate::material::Material;
 use crate::mesh::{MtlMaterial, TextureSource};
 use crate::shading::ShadingModelKind;
-use crate::texture::{Texture, WrapMode};
+use crate::texture::Texture;
 
 use super::SceneFile;
 
@@ -124,7 +124,7 @@ impl<'f> MaterialTable<'f> {
             shininess: m.ns.unwrap_or(1.0),
             opacity: m.opacity.unwrap_or(1.0).clamp(0.0, 1.0),
             kd_texture,
-            wrap: if m.map_kd_clamp { WrapMode::Clamp } else { WrapMode::Repeat },
+            wrap: m.map_kd_wrap,
             model: self.model,
         });
         Ok(self.materials.len() as u32 - 1)
