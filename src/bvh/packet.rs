@@ -5,8 +5,9 @@
 //! multiplies and subtractions, no fused multiply-add), so every lane's
 //! `t, u, v` are bit-identical to the scalar routine's. Lanes with an edge
 //! function whose single-precision sign is uncertain (within
-//! `SIGN_MARGIN` error bounds of 0) take the scalar routine, with its
-//! double-precision fallback, instead.
+//! `SIGN_MARGIN` error bounds of 0), or a distance not provably positive or
+//! whose edge-function error may exceed `T_SPREAD_MAX`, take the scalar
+//! routine, with its double-precision fallback, instead.
 //!
 //! The vertices are stored, not edges or a normal: the watertight test works
 //! on the vertices relative to the ray origin, and any precomputed quantity
@@ -15,7 +16,7 @@
 use glam::Vec3;
 
 use crate::geometry::offset::gamma;
-use crate::geometry::triangle::{E_FLOOR, SIGN_MARGIN, T_ETA, TriangleKernel, WatertightRay};
+use crate::geometry::triangle::{E_FLOOR, SIGN_MARGIN, T_ETA, T_SPREAD_MAX, TriangleKernel, WatertightRay};
 use crate::geometry::{Hit, Ray};
 
 use super::prims::{LeafPrims, watertight};
@@ -320,7 +321,7 @@ fn offer(best: &mut Option<Hit>, ray: &mut Ray, t: f32, id: u32, u: f32, v: f32)
 macro_rules! watertight_lanes {
     ($v:ty, $ld:ident, $lane:ident, $ray:expr; $sub:path, $mul:path, $add:path, $max:path, $min:path,
      $andnot:path, $or:path, $xor:path, $and:path, $div:path, $set1:path, $zero:path, $ngt:path, $ge:path,
-     $le:path, $movemask:path) => {{
+     $le:path, $gt:path, $movemask:path) => {{
         let (ox, oy, oz) = ($lane(0), $lane(1), $lane(2));
         // `nsz` is `-sz` ([`LeafRay`]).
         let (sx, sy, nsz) = ($lane(3), $lane(4), $lane(5));
@@ -375,13 +376,23 @@ macro_rules! watertight_lanes {
         let t_scaled = $add($add($mul(e0, az), $mul(e1, bz)), $mul(e2, cz));
         let inv_det = $div($set1(1.0), det);
         let t = $mul(t_scaled, inv_det);
-        // Ordered comparisons: a NaN t fails both, as `!(t >= t_min && t <= t_max)` rejects it.
-        let in_range = $and($ge(t, $set1($ray.t_min)), $le(t, $set1($ray.t_max)));
+        // Ordered comparisons: a NaN t fails both, as `!(t >= t_min)` and `!(t <= t_max)` reject it.
         // Sign bits only from here on (movemask reads nothing else).
-        let ok = $andnot($or(mixed, uncertain), in_range);
+        let past_min = $andnot($or(mixed, uncertain), $ge(t, $set1($ray.t_min)));
         let zero_mask = $movemask(uncertain) as u32;
+        if $movemask(past_min) == 0 {
+            // Most packets are missed: skip the t error bounds.
+            let z = $zero();
+            return (0, zero_mask, z, z, z);
+        }
+        // The edge functions' share of t's error (`watertight_t_spread_error`, same operation
+        // order), before `t_max` as in the scalar routine: lanes where it may exceed
+        // `T_SPREAD_MAX` go to the scalar routine.
+        let spread = $add($add(abs($sub(az, t)), abs($sub(bz, t))), abs($sub(cz, t)));
+        let imprecise = $and($gt($mul($mul(delta_e, spread), abs(inv_det)), $mul($set1(T_SPREAD_MAX), t)), past_min);
+        let zero_mask = zero_mask | $movemask(imprecise) as u32;
+        let ok = $andnot(imprecise, $and(past_min, $le(t, $set1($ray.t_max))));
         if $movemask(ok) == 0 {
-            // Most packets are missed: skip the t error bound.
             let z = $zero();
             return (0, zero_mask, z, z, z);
         }
@@ -409,7 +420,7 @@ macro_rules! watertight_lanes {
 /// The watertight test on four lanes: `(hit mask, uncertain mask, t, u, v)`.
 /// Lanes in the uncertain mask (some edge function within `SIGN_MARGIN`
 /// error bounds of 0 in single precision, or a distance in range that is not
-/// provably positive) are excluded from the hit mask and must be decided by
+/// provably positive or may be imprecise beyond `T_SPREAD_MAX`) are excluded from the hit mask and must be decided by
 /// the scalar routine. `t, u, v` are meaningful only in hit lanes (zero when
 /// there are none).
 #[cfg(target_arch = "x86_64")]
@@ -439,7 +450,7 @@ fn tri4_sse(
         let lane = |i: usize| _mm_set1_ps(lr.c[i]);
         watertight_lanes!(__m128, ld, lane, ray; _mm_sub_ps, _mm_mul_ps, _mm_add_ps, _mm_max_ps, _mm_min_ps,
             _mm_andnot_ps, _mm_or_ps, _mm_xor_ps, _mm_and_ps, _mm_div_ps, _mm_set1_ps, _mm_setzero_ps,
-            _mm_cmpngt_ps, _mm_cmpge_ps, _mm_cmple_ps, _mm_movemask_ps)
+            _mm_cmpngt_ps, _mm_cmpge_ps, _mm_cmple_ps, _mm_cmpgt_ps, _mm_movemask_ps)
     }
 }
 
@@ -480,7 +491,7 @@ unsafe fn tri8_avx(
         watertight_lanes!(__m256, ld, lane, ray; _mm256_sub_ps, _mm256_mul_ps, _mm256_add_ps, _mm256_max_ps,
             _mm256_min_ps, _mm256_andnot_ps, _mm256_or_ps, _mm256_xor_ps, _mm256_and_ps, _mm256_div_ps,
             _mm256_set1_ps, _mm256_setzero_ps, _mm256_cmp_ps::<_CMP_NGT_UQ>, _mm256_cmp_ps::<_CMP_GE_OQ>,
-            _mm256_cmp_ps::<_CMP_LE_OQ>, _mm256_movemask_ps)
+            _mm256_cmp_ps::<_CMP_LE_OQ>, _mm256_cmp_ps::<_CMP_GT_OQ>, _mm256_movemask_ps)
     }
 }
 

@@ -27,7 +27,7 @@
 use std::mem::MaybeUninit;
 
 use crate::geometry::offset::gamma;
-use crate::geometry::triangle::{E_FLOOR, SIGN_MARGIN, T_ETA, TriangleKernel};
+use crate::geometry::triangle::{E_FLOOR, SIGN_MARGIN, T_ETA, T_SPREAD_MAX, TriangleKernel};
 use crate::geometry::{Hit, Ray};
 
 use super::packet::LeafRay;
@@ -386,8 +386,8 @@ const SOA_LEAF_RAYS_ANY: u32 = 2;
 /// [`crate::geometry::triangle::intersect_watertight`] in the same order (as
 /// `packet::tri4_sse` does with triangles in the lanes), so a hit lane's `t,
 /// u, v` are the scalar routine's bits; uncertain lanes (an edge sign within
-/// `SIGN_MARGIN` bounds of 0, or a distance not provably positive) must be
-/// decided by the scalar routine.
+/// `SIGN_MARGIN` bounds of 0, or a distance not provably positive or
+/// imprecise beyond `T_SPREAD_MAX`) must be decided by the scalar routine.
 ///
 /// # Safety
 /// The CPU must have AVX2 (the callers are AVX2 functions, into which this is inlined).
@@ -460,10 +460,28 @@ unsafe fn tri_x8(
         let inv_det = _mm256_div_ps(_mm256_set1_ps(1.0), det);
         let t = _mm256_mul_ps(t_scaled, inv_det);
         // Ordered comparisons: a NaN t fails both, as `!(t >= t_min && t <= t_max)` rejects it.
-        let in_range = _mm256_and_ps(_mm256_cmp_ps::<_CMP_GE_OS>(t, sh.t_min), _mm256_cmp_ps::<_CMP_LE_OS>(t, t_max));
         // Sign bits only from here on (movemask reads nothing else).
-        let ok = _mm256_andnot_ps(_mm256_or_ps(mixed, uncertain), in_range);
+        let past_min = _mm256_andnot_ps(_mm256_or_ps(mixed, uncertain), _mm256_cmp_ps::<_CMP_GE_OS>(t, sh.t_min));
         let zero_mask = _mm256_movemask_ps(uncertain) as u32;
+        if _mm256_movemask_ps(past_min) == 0 {
+            return (0, zero_mask, [0.0; PACKET], [0.0; PACKET], [0.0; PACKET]);
+        }
+        // The edge functions' share of t's error (`watertight_t_spread_error`, same operation
+        // order), before `t_max` as in the scalar routine: lanes where it may exceed
+        // `T_SPREAD_MAX` go to the scalar routine.
+        let spread = _mm256_add_ps(
+            _mm256_add_ps(abs(_mm256_sub_ps(az, t)), abs(_mm256_sub_ps(bz, t))),
+            abs(_mm256_sub_ps(cz, t)),
+        );
+        let imprecise = _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_GT_OS>(
+                _mm256_mul_ps(_mm256_mul_ps(delta_e, spread), abs(inv_det)),
+                _mm256_mul_ps(_mm256_set1_ps(T_SPREAD_MAX), t),
+            ),
+            past_min,
+        );
+        let zero_mask = zero_mask | _mm256_movemask_ps(imprecise) as u32;
+        let ok = _mm256_andnot_ps(imprecise, _mm256_and_ps(past_min, _mm256_cmp_ps::<_CMP_LE_OS>(t, t_max)));
         if _mm256_movemask_ps(ok) == 0 {
             return (0, zero_mask, [0.0; PACKET], [0.0; PACKET], [0.0; PACKET]);
         }

@@ -201,7 +201,22 @@ pub fn intersect_watertight(ray: &Ray, wr: &WatertightRay, v0: Vec3, v1: Vec3, v
     let t_scaled = e0 * az + e1 * bz + e2 * cz;
     let inv_det = 1.0 / det;
     let t = t_scaled * inv_det;
-    if !(t >= ray.t_min && t <= ray.t_max) {
+    // Ordered comparisons: a NaN t is neither past `t_min` nor within `t_max`.
+    let past_min = t >= ray.t_min;
+    if !past_min {
+        return None;
+    }
+    // A distance whose edge-function error may move it too far
+    // ([`T_SPREAD_MAX`]: thin or small triangles seen at an angle) is decided
+    // in double precision, before `t_max`: that bound shrinks as a traversal
+    // finds hits, and the answer must not depend on their order.
+    if watertight_t_spread_error(watertight_e_error(max_xt, max_yt, max_zt), [az, bz, cz], t, inv_det)
+        > T_SPREAD_MAX * t
+    {
+        return intersect_watertight_f64(ray, wr, v0, v1, v2);
+    }
+    let within_max = t <= ray.t_max;
+    if !within_max {
         return None;
     }
     // A distance that is not provably positive in single precision (pbrt-v4,
@@ -243,6 +258,54 @@ pub const E_FLOOR: f32 = 1.0 / (1u128 << 100) as f32;
 /// `e_i z_i` should they underflow (at most `2^-150` each), which the bound's
 /// relative terms (underflowing with them) do not.
 pub const T_ETA: f32 = f32::MIN_POSITIVE;
+
+/// How large, relative to `t`, the edge functions' share of the watertight
+/// test's distance error ([`watertight_t_spread_error`]) may be before the
+/// hit is decided in double precision instead: `2^8 u = 2^-16` (`u = 2^-24`).
+///
+/// The single-precision distance is the barycentric blend `sum e_i z_i / sum
+/// e_i` of the vertices' distances `z_i` along the ray. Edge-function errors
+/// `eps_i` (each at most `delta_e`, [`watertight_e_error`]) cancel from it
+/// except through `sum eps_i (z_i - t) / det`, so they move `t` by at most
+/// `delta_e sum |z_i - t| / |det|`; the other roundings (of the `z_i`, the
+/// products, sums and `1 / det`) move it by about `10 u t` when every `z_i`
+/// is positive. pbrt-v4's `delta_t` ([`watertight_t_error`]) has
+/// `delta_e max z / |det|` in place of the first term, so relative to `t` it
+/// is far larger (above `2^14 u` on a fifth of dragon_87k's primary hits)
+/// and useless as a test of accuracy. On thin triangles `|det|` is small
+/// beside `delta_e`: the first term is what carried regr01.obj's 48
+/// distances beyond the parity bound (`verify::hits::bounds`: at least
+/// `32 u t / sqrt(3) / cos` for a unit direction), every one with the term
+/// above `3e4 u t`.
+///
+/// Not a proof: `delta_e` is a worst case far above the errors that occur,
+/// and a threshold that proves the parity bound against it (about `8 u t`)
+/// sends 83% to 95% of the hits of ordinary meshes to double precision.
+/// Measured instead (primary, incoherent, edge, vertex, grazing, surface and
+/// scaled rays on dragon_87k, suzanne, teapot, bunny and regr01, against
+/// the exact hit): wherever the term exceeds `64 u t`, the error stays below
+/// 0.16 of it, so below about `40 u t` at this threshold, which the bound
+/// admits at `cos < 0.46`, and the term is large only where the plane
+/// slopes along the ray (`z_i` far from `t`), that is at small `cos`; the
+/// least term with an error beyond a quarter of the bound was `5000 u t`
+/// (regr01, edge rays), twenty times the threshold. Double precision (whose
+/// only error is then the rounding of `t` to `f32`) decides 0.3% and 0.4%
+/// of dragon_87k's and suzanne's primary hits, 1.1% and 7.4% of their
+/// incoherent ones, a fifth to a quarter of grazing ones, and on regr01
+/// (large triangles seen from close by, where the bound's `|o| + |p|` far
+/// exceeds `t`) 28% of incoherent and 60% of surface-ray hits.
+pub const T_SPREAD_MAX: f32 = 256.0 * (f32::EPSILON * 0.5);
+
+/// The edge functions' share of the watertight test's distance error (see
+/// [`T_SPREAD_MAX`]): `delta_e (|z_0 - t| + |z_1 - t| + |z_2 - t|) |1 / det|`,
+/// from the edge-function bound `delta_e`, the sheared distances `z` of the
+/// vertices along the ray, the distance `t` and `1 / det`. The SIMD leaf
+/// tests in `bvh` compute it with the same operations in the same order.
+#[inline(always)]
+pub fn watertight_t_spread_error(delta_e: f32, z: [f32; 3], t: f32, inv_det: f32) -> f32 {
+    let spread = (z[0] - t).abs() + (z[1] - t).abs() + (z[2] - t).abs();
+    delta_e * spread * inv_det.abs()
+}
 
 /// Bound on the absolute error of the watertight test's single-precision
 /// edge functions (pbrt-v4, section 6.8.7: `delta_e`), from the largest

@@ -93,3 +93,83 @@ pub(crate) fn near_edge(h: &Hit, b_bound: f64) -> bool {
     let w = 1.0 - h.u as f64 - h.v as f64;
     (h.u as f64).min(h.v as f64).min(w) <= b_bound
 }
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+
+    use glam::Vec3;
+
+    use super::*;
+    use crate::backends::{AccelConfig, build_tracer};
+    use crate::geometry::Triangle;
+    use crate::geometry::triangle::{WatertightRay, intersect_watertight};
+    use crate::rng::Pcg32 as Rng;
+    use crate::verify::hits::arbiter::Arbiter;
+
+    /// Slivers (aspect ratios 100 to 10,000) in random orientations, hit by
+    /// rays from random directions at points inside them: every distance and
+    /// barycentric pair of the watertight test, scalar and through the BVH's
+    /// leaf tests, is within this module's bound of the exact hit
+    /// ([`Arbiter::evaluate`]). Before the test sent hits whose edge-function
+    /// error may move `t` too far to double precision
+    /// (`geometry::triangle::T_SPREAD_MAX`), it returned distances beyond the
+    /// bound on such triangles (regr01.obj's thin triangles, edge rays).
+    #[test]
+    fn watertight_distances_on_thin_triangles_are_within_the_bound_of_the_exact_hit() {
+        let mut rng = Rng::new(0x5117e5, 7);
+        let mut tris = Vec::new();
+        for _ in 0..256 {
+            let c = rng.in_box(Vec3::splat(-1.0), Vec3::splat(1.0));
+            let a = rng.unit_vector();
+            let b = a.cross(rng.unit_vector()).normalize();
+            let len = 0.2;
+            let w = len * 10f32.powf(-rng.range(2.0, 4.0));
+            let shift = rng.range(-0.5, 0.5) * len;
+            tris.push(Triangle { v: [c - a * (len / 2.0), c + a * (len / 2.0), c + a * shift + b * w] });
+        }
+        let prims = Arc::new(Primitives { triangles: tris.clone(), spheres: Vec::new() });
+        let tracer = build_tracer(prims.clone(), &AccelConfig::default()).expect("a BVH");
+        let arbiter = Arbiter::new(prims.clone());
+        let (mut hits, mut beyond) = (0, Vec::new());
+        let mut check = |ray: &Ray, h: Hit, how: &str| {
+            let exact = arbiter.evaluate(ray, h.prim);
+            let (tb, bb) = bounds(ray, &h, &hit_geom(&prims, ray, &h));
+            let dt = (h.t as f64 - exact.t_f64).abs();
+            let db = (h.u as f64 - exact.bary[1]).abs().max((h.v as f64 - exact.bary[2]).abs());
+            hits += 1;
+            if !(dt <= tb && db <= bb) {
+                beyond.push(format!(
+                    "{how} prim {}: t {} exact {} ({:.2} bounds), bary {:.2} bounds",
+                    h.prim,
+                    h.t,
+                    exact.t_f64,
+                    dt / tb,
+                    db / bb
+                ));
+            }
+        };
+        for (i, t) in tris.iter().enumerate() {
+            for _ in 0..16 {
+                let (s, r) = (rng.next_f32(), rng.next_f32());
+                let (s, r) = if s + r > 1.0 { (1.0 - s, 1.0 - r) } else { (s, r) };
+                let target = t.v[0] + s * (t.v[1] - t.v[0]) + r * (t.v[2] - t.v[0]);
+                let d = rng.unit_vector();
+                let ray = Ray::new(target - d * rng.range(1.0, 3.0), d);
+                if let Some((t_, u, v)) = intersect_watertight(&ray, &WatertightRay::new(d), t.v[0], t.v[1], t.v[2]) {
+                    check(&ray, Hit { t: t_, prim: i as u32, u, v }, "scalar");
+                }
+                if let Some(h) = tracer.intersect(&ray) {
+                    check(&ray, h, "bvh");
+                }
+            }
+        }
+        assert!(hits > 6000, "only {hits} hits");
+        assert!(
+            beyond.is_empty(),
+            "{} of {hits} hits beyond the bound: {:#?}",
+            beyond.len(),
+            &beyond[..beyond.len().min(5)]
+        );
+    }
+}
