@@ -136,38 +136,70 @@ fn both_children(cl: &Row, cr: &Row) -> (Row, [u8; WIDTH + 1]) {
     // `shifted[WIDTH + m] = cr[m]` for `m >= 1` and infinity below, so that
     // lanes `i = 1..=WIDTH` read `cr[i - j]` from `shifted[WIDTH + 1 - j..]`,
     // infinite where `i - j < 1` (a sum the lane never takes).
+    #[cfg(not(target_arch = "x86_64"))]
     let mut shifted = [f32::INFINITY; 2 * WIDTH + 1];
+    #[cfg(not(target_arch = "x86_64"))]
     shifted[WIDTH + 1..].copy_from_slice(&cr[1..]);
     // Lane `i - 1` holds `i`. j = 1 is taken unconditionally (see above).
     let mut dist = [0.0f32; WIDTH];
     let mut split = [1u32; WIDTH];
     #[cfg(target_arch = "x86_64")]
-    // SAFETY: SSE2 is part of the x86_64 baseline. The unaligned loads read
-    // `shifted[k..k + 4]` for `k <= 2 * WIDTH - 4` (lanes `WIDTH + 1 - j + 4 ..
-    // + 8` for `j >= 2`, and `WIDTH + 4 .. 2 * WIDTH` for `j = 1`), inside its
-    // `2 * WIDTH + 1` entries; the stores write the two 8-lane arrays.
+    // SAFETY: SSE2 is part of the x86_64 baseline. The two unaligned loads
+    // read `cr[1..9]`; the stores write the two 8-lane arrays.
     unsafe {
         // The loop below in two 4-lane halves (rustc left it scalar: about
         // 110 instructions per call on the additions alone). `min_ps(c, d)`
         // is `if c < d { c } else { d }` lane for lane (NaN and signed zeros
         // included), and the split takes `j` where `c < d`.
+        //
+        // The windows `shifted[k..k + 4]` are shifted together in registers
+        // from `cr`'s two halves and infinities: loaded from `shifted` just
+        // after it was written, each load spanned two stores, which the CPU
+        // cannot forward (the first stalled; 15% of `entry`'s time, `perf
+        // record` on suzanne). Windows of infinities only (the low lanes
+        // for `j >= 5`) change nothing: `c` is infinite or NaN, never below
+        // `d`, and `min_ps` then keeps `d`.
         use std::arch::x86_64::*;
         const { assert!(WIDTH == 8) };
-        let sh = shifted.as_ptr();
-        let ld = |k: usize| _mm_loadu_ps(sh.add(k));
-        let c1 = _mm_set1_ps(cl[1]);
-        let (mut d_lo, mut d_hi) = (_mm_add_ps(c1, ld(WIDTH)), _mm_add_ps(c1, ld(WIDTH + 4)));
-        let (mut s_lo, mut s_hi) = (_mm_set1_epi32(1), _mm_set1_epi32(1));
-        for (j, &cj) in cl.iter().enumerate().take(WIDTH).skip(2) {
-            let (a, jv) = (_mm_set1_ps(cj), _mm_set1_epi32(j as i32));
-            let k = WIDTH + 1 - j;
-            let (c_lo, c_hi) = (_mm_add_ps(a, ld(k)), _mm_add_ps(a, ld(k + 4)));
-            let (m_lo, m_hi) = (_mm_castps_si128(_mm_cmplt_ps(c_lo, d_lo)), _mm_castps_si128(_mm_cmplt_ps(c_hi, d_hi)));
-            d_lo = _mm_min_ps(c_lo, d_lo);
-            d_hi = _mm_min_ps(c_hi, d_hi);
-            s_lo = _mm_or_si128(_mm_and_si128(m_lo, jv), _mm_andnot_si128(m_lo, s_lo));
-            s_hi = _mm_or_si128(_mm_and_si128(m_hi, jv), _mm_andnot_si128(m_hi, s_hi));
+        let inf = _mm_set1_ps(f32::INFINITY);
+        let (r0, r1) = (_mm_loadu_ps(cr.as_ptr().add(1)), _mm_loadu_ps(cr.as_ptr().add(5)));
+        // Lanes `r..4` of `a` then lanes `0..r` of `b` (`r` in 1..=3).
+        macro_rules! window {
+            ($a:expr, $b:expr, $r:literal) => {
+                _mm_castsi128_ps(_mm_or_si128(
+                    _mm_srli_si128::<{ 4 * $r }>(_mm_castps_si128($a)),
+                    _mm_slli_si128::<{ 16 - 4 * $r }>(_mm_castps_si128($b)),
+                ))
+            };
         }
+        // `shifted[k..k + 4]` is `window(inf, r0, k - 5)` for `k` in 6..=8,
+        // `r0` at 9, `window(r0, r1, k - 9)` for `k` in 10..=12.
+        let c1 = _mm_set1_ps(cl[1]);
+        let (mut d_lo, mut d_hi) = (_mm_add_ps(c1, window!(inf, r0, 3)), _mm_add_ps(c1, window!(r0, r1, 3)));
+        let (mut s_lo, mut s_hi) = (_mm_set1_epi32(1), _mm_set1_epi32(1));
+        macro_rules! step {
+            ($j:literal, $hi:expr) => {{
+                let (a, jv) = (_mm_set1_ps(cl[$j]), _mm_set1_epi32($j));
+                let c_hi = _mm_add_ps(a, $hi);
+                let m_hi = _mm_castps_si128(_mm_cmplt_ps(c_hi, d_hi));
+                d_hi = _mm_min_ps(c_hi, d_hi);
+                s_hi = _mm_or_si128(_mm_and_si128(m_hi, jv), _mm_andnot_si128(m_hi, s_hi));
+                a
+            }};
+            ($j:literal, $lo:expr, $hi:expr) => {{
+                let a = step!($j, $hi);
+                let c_lo = _mm_add_ps(a, $lo);
+                let m_lo = _mm_castps_si128(_mm_cmplt_ps(c_lo, d_lo));
+                d_lo = _mm_min_ps(c_lo, d_lo);
+                s_lo = _mm_or_si128(_mm_and_si128(m_lo, _mm_set1_epi32($j)), _mm_andnot_si128(m_lo, s_lo));
+            }};
+        }
+        step!(2, window!(inf, r0, 2), window!(r0, r1, 2));
+        step!(3, window!(inf, r0, 1), window!(r0, r1, 1));
+        step!(4, inf, r0);
+        step!(5, window!(inf, r0, 3));
+        step!(6, window!(inf, r0, 2));
+        step!(7, window!(inf, r0, 1));
         _mm_storeu_ps(dist.as_mut_ptr(), d_lo);
         _mm_storeu_ps(dist.as_mut_ptr().add(4), d_hi);
         _mm_storeu_si128(split.as_mut_ptr().cast(), s_lo);
