@@ -4,20 +4,10 @@
 use std::ffi::{c_char, c_void};
 
 // The header's constants and layouts, from the crate that plugins written in Rust use too.
+use rtdiff_plugin_abi::SceneNewFn as SceneNew;
 pub use rtdiff_plugin_abi::{ABI_VERSION, FEATURE_SPHERES, Hit as RtdiffHit, INVALID_ID, Ray as RtdiffRay};
 
 const _: () = assert!(std::mem::size_of::<RtdiffRay>() == 32 && std::mem::size_of::<RtdiffHit>() == 16);
-
-type SceneNew = unsafe extern "C" fn(
-    vertices: *const f32,
-    vertex_count: u32,
-    indices: *const u32,
-    triangle_count: u32,
-    spheres: *const f32,
-    sphere_count: u32,
-    error: *mut c_char,
-    error_len: usize,
-) -> *mut c_void;
 
 /// The entry points of one plugin (valid while its library is loaded, i.e. for the process).
 #[derive(Clone, Copy)]

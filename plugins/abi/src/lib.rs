@@ -13,6 +13,18 @@ pub const INVALID_ID: u32 = u32::MAX;
 /// `RTDIFF_FEATURE_SPHERES`.
 pub const FEATURE_SPHERES: u32 = 1;
 
+/// The type of `rtdiff_tracer_scene_new`, for a host that resolves it from a library.
+pub type SceneNewFn = unsafe extern "C" fn(
+    vertices: *const f32,
+    vertex_count: u32,
+    indices: *const u32,
+    triangle_count: u32,
+    spheres: *const f32,
+    sphere_count: u32,
+    error: *mut c_char,
+    error_len: usize,
+) -> *mut std::ffi::c_void;
+
 /// `rtdiff_ray`: `org + t dir`, `t` in `[tnear, tfar]`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
