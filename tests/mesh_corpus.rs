@@ -179,7 +179,7 @@ fn broken_files_exit_non_zero_with_the_line_never_a_panic() {
 fn every_mesh_holds_hit_parity_against_embree() {
     use rtdiff::backends::AccelConfig;
     use rtdiff::rays::SetKind;
-    use rtdiff::verify::hits::{self as parity, ParityOptions, Reference};
+    use rtdiff::verify::hits::{self as parity, ParityOptions};
     let dir = corpus();
     for (name, expected) in FILES {
         if expected.is_err() {
@@ -193,12 +193,9 @@ fn every_mesh_holds_hit_parity_against_embree() {
             sets: vec![SetKind::Primary, SetKind::Shadow, SetKind::Edges, SetKind::Vertices],
             count: 2_000,
             seed: 17,
-            reference: Reference::Embree,
             variants: vec![AccelConfig::default()],
-            sweep_count: None,
-            stress: false,
-            arbiter: true,
             max_examples: 3,
+            ..ParityOptions::default()
         };
         let r = parity::run(&ctx, &opts).unwrap();
         for s in &r.sets {

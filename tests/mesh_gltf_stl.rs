@@ -204,7 +204,7 @@ fn mesh_files(dir: &Path, out: &mut Vec<PathBuf>) {
 fn gltf_and_stl_files_render_and_hold_parity_against_embree() {
     use rtdiff::backends::AccelConfig;
     use rtdiff::rays::SetKind;
-    use rtdiff::verify::hits::{ParityOptions, Reference};
+    use rtdiff::verify::hits::ParityOptions;
     let assimp = common::root().join("assets/assimp");
     assert!(assimp.join("glTF2").is_dir(), "{} is missing: run scripts/fetch-assets.sh", assimp.display());
     let mut files = Vec::new();
@@ -237,12 +237,9 @@ fn gltf_and_stl_files_render_and_hold_parity_against_embree() {
             sets: vec![SetKind::Primary, SetKind::Shadow, SetKind::Edges, SetKind::Vertices],
             count: 1_000,
             seed: 17,
-            reference: Reference::Embree,
             variants: vec![AccelConfig::default()],
-            sweep_count: None,
-            stress: false,
-            arbiter: true,
             max_examples: 3,
+            ..ParityOptions::default()
         };
         let r = rtdiff::verify::hits::run(&ctx, &opts).unwrap();
         for s in &r.sets {
