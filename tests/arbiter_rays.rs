@@ -291,12 +291,14 @@ fn near_tie(
 /// distances (fractions compared by cross-multiplication) put 448 first.
 /// The watertight test's single-precision distance of 448 is 4e-6 too far
 /// (a grazing hit's `t` carries the edge functions' rounding), behind 2's, so
-/// native used to return 2; that error is now caught
-/// (`geometry::triangle::T_SPREAD_MAX`) and 448 decided in double precision,
-/// so native returns 448, as Embree does. At this angle one rounding of the
-/// direction moves the grazed hit along the ray by 11 times the gap: the
-/// order's margin is 0.09 units, the ray is ill-conditioned, and an answer
-/// of 2 would still be within the bound.
+/// native returns 2 where Embree returns 448. At this angle one rounding of
+/// the direction moves the grazed hit along the ray by 11 times the gap: the
+/// order's margin is 0.09 units, the ray is ill-conditioned, and both
+/// answers are within the bound: the arbiter must say so, and class a
+/// disagreement here as ill-conditioned, not as a wrong answer. (For one
+/// stop native decided 448 in double precision, `geometry::triangle::
+/// T_SPREAD_MAX` then comparing the error with `t` alone; measured against
+/// the bound, as now, the error is well inside it.)
 #[test]
 fn near_tie_in_distance_reversed_by_a_grazing_hit() {
     let prims = normalised("suzanne.obj");
@@ -306,7 +308,8 @@ fn near_tie_in_distance_reversed_by_a_grazing_hit() {
     assert!(front.inside > 30.0 && back.inside > 1e5, "{} {}", front.inside, back.inside);
     assert!(truth.ill_conditioned() && (truth.margin - 0.0897).abs() < 1e-3, "margin {}", truth.margin);
     let native = build_tracer(prims.clone(), &AccelConfig::default()).unwrap().intersect(&ray).unwrap();
-    assert_eq!(native.prim, 448, "{native:?}");
+    assert!([448, 2].contains(&native.prim), "{native:?}");
+    assert!(matches!(arb.judge(&ray, &truth, Some(native.prim)), Verdict::Exact | Verdict::WithinBound));
     assert_eq!(arb.judge(&ray, &truth, Some(448)), Verdict::Exact);
     assert_eq!(arb.judge(&ray, &truth, Some(2)), Verdict::WithinBound);
     let class = ArbiterClass::of(Verdict::WithinBound, arb.judge(&ray, &truth, Some(448)), truth.ill_conditioned());

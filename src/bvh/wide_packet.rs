@@ -27,7 +27,7 @@
 use std::mem::MaybeUninit;
 
 use crate::geometry::offset::gamma;
-use crate::geometry::triangle::{E_FLOOR, SIGN_MARGIN, T_ETA, T_SPREAD_MAX, TriangleKernel};
+use crate::geometry::triangle::{E_FLOOR, SIGN_MARGIN, SQRT_3_2, T_ETA, T_SPREAD_MAX, TriangleKernel};
 use crate::geometry::{Hit, Ray};
 
 use super::packet::LeafRay;
@@ -324,6 +324,8 @@ struct Sheared {
     o: [std::arch::x86_64::__m256; 3],
     s: [std::arch::x86_64::__m256; 3],
     t_min: std::arch::x86_64::__m256,
+    /// The rays' [`SpreadScale`](crate::geometry::triangle::SpreadScale)s, `ro` and `dq` (zero for the tests that take no shear).
+    spread: [std::arch::x86_64::__m256; 2],
 }
 
 /// Vertex `j` of lane `l` of `p` on each ray's permuted axes, the rays'
@@ -387,7 +389,7 @@ const SOA_LEAF_RAYS_ANY: u32 = 2;
 /// `packet::tri4_sse` does with triangles in the lanes), so a hit lane's `t,
 /// u, v` are the scalar routine's bits; uncertain lanes (an edge sign within
 /// `SIGN_MARGIN` bounds of 0, or a distance not provably positive or
-/// imprecise beyond `T_SPREAD_MAX`) must be decided by the scalar routine.
+/// possibly too imprecise, `T_SPREAD_MAX`) must be decided by the scalar routine.
 ///
 /// # Safety
 /// The CPU must have AVX2 (the callers are AVX2 functions, into which this is inlined).
@@ -466,20 +468,24 @@ unsafe fn tri_x8(
         if _mm256_movemask_ps(past_min) == 0 {
             return (0, zero_mask, [0.0; PACKET], [0.0; PACKET], [0.0; PACKET]);
         }
-        // The edge functions' share of t's error (`watertight_t_spread_error`, same operation
-        // order), before `t_max` as in the scalar routine: lanes where it may exceed
-        // `T_SPREAD_MAX` go to the scalar routine.
+        // The edge functions' share of t's error against the parity bound
+        // (`watertight_t_imprecise`, same operation order), before `t_max` as
+        // in the scalar routine: lanes where it may be too large go to the
+        // scalar routine.
         let spread = _mm256_add_ps(
             _mm256_add_ps(abs(_mm256_sub_ps(az, t)), abs(_mm256_sub_ps(bz, t))),
             abs(_mm256_sub_ps(cz, t)),
         );
-        let imprecise = _mm256_and_ps(
-            _mm256_cmp_ps::<_CMP_GT_OS>(
-                _mm256_mul_ps(_mm256_mul_ps(delta_e, spread), abs(inv_det)),
-                _mm256_mul_ps(_mm256_set1_ps(T_SPREAD_MAX), t),
-            ),
-            past_min,
+        let (ba_x, ba_y, ba_z) = (_mm256_sub_ps(bx, ax), _mm256_sub_ps(by, ay), _mm256_sub_ps(bz, az));
+        let (ca_x, ca_y, ca_z) = (_mm256_sub_ps(cx, ax), _mm256_sub_ps(cy, ay), _mm256_sub_ps(cz, az));
+        let nx = _mm256_sub_ps(_mm256_mul_ps(ba_y, ca_z), _mm256_mul_ps(ba_z, ca_y));
+        let ny = _mm256_sub_ps(_mm256_mul_ps(ba_z, ca_x), _mm256_mul_ps(ba_x, ca_z));
+        let slope = _mm256_mul_ps(_mm256_add_ps(abs(nx), abs(ny)), sh.spread[1]);
+        let allowed = _mm256_mul_ps(
+            _mm256_mul_ps(_mm256_set1_ps(T_SPREAD_MAX), _mm256_max_ps(sh.spread[0], t)),
+            _mm256_max_ps(slope, abs(det)),
         );
+        let imprecise = _mm256_and_ps(_mm256_cmp_ps::<_CMP_GT_OS>(_mm256_mul_ps(delta_e, spread), allowed), past_min);
         let zero_mask = zero_mask | _mm256_movemask_ps(imprecise) as u32;
         let ok = _mm256_andnot_ps(imprecise, _mm256_and_ps(past_min, _mm256_cmp_ps::<_CMP_LE_OS>(t, t_max)));
         if _mm256_movemask_ps(ok) == 0 {
@@ -827,7 +833,8 @@ fn rays8<K: TriangleKernel>(soa: &Soa) -> Sheared {
         return shear8(soa);
     }
     let (d, o, t_min) = gather8(soa);
-    Sheared { k: [0, 1, 2], mixed: None, o, s: d, t_min }
+    let zero = std::arch::x86_64::_mm256_setzero_ps();
+    Sheared { k: [0, 1, 2], mixed: None, o, s: d, t_min, spread: [zero; 2] }
 }
 
 /// The packet's directions, origins and `t_min` as rows of eight lanes.
@@ -857,6 +864,13 @@ fn shear8(soa: &Soa) -> Sheared {
     let dz = _mm256_blendv_ps(_mm256_blendv_ps(d[0], d[1], z1), d[2], z2);
     // kx = kz + 1 and ky = kz + 2 (mod 3), swapped where dir[kz] < 0.
     let neg = _mm256_cmp_ps::<_CMP_LT_OQ>(dz, _mm256_setzero_ps());
+    // `SpreadScale::of`, same operations: `|o|_inf |1 / dz|` and `|dz| sqrt(3/2)`.
+    let abs_o = o.map(|x| _mm256_andnot_ps(sign, x));
+    let o_inf = _mm256_max_ps(_mm256_max_ps(abs_o[0], abs_o[1]), abs_o[2]);
+    let spread = [
+        _mm256_mul_ps(o_inf, _mm256_andnot_ps(sign, _mm256_div_ps(_mm256_set1_ps(1.0), dz))),
+        _mm256_mul_ps(_mm256_andnot_ps(sign, dz), _mm256_set1_ps(SQRT_3_2)),
+    ];
     let uniform = |m: __m256| matches!(_mm256_movemask_ps(m), 0 | 0xff);
     if uniform(z0) && uniform(z1) && uniform(neg) {
         let kz = if _mm256_movemask_ps(z0) != 0 {
@@ -871,7 +885,7 @@ fn shear8(soa: &Soa) -> Sheared {
             std::mem::swap(&mut kx, &mut ky);
         }
         let s = [_mm256_div_ps(d[kx], dz), _mm256_div_ps(d[ky], dz), _mm256_div_ps(_mm256_set1_ps(1.0), dz)];
-        return Sheared { k: [kx, ky, kz], mixed: None, o: [o[kx], o[ky], o[kz]], s, t_min };
+        return Sheared { k: [kx, ky, kz], mixed: None, o: [o[kx], o[ky], o[kz]], s, t_min, spread };
     }
     // Per lane: axis kx is y where kz = 0 (z where kz = 1), axis ky is z where
     // kz = 0 (y where kz = 2); the two trade places where dir[kz] < 0.
@@ -885,7 +899,7 @@ fn shear8(soa: &Soa) -> Sheared {
     let (dx, dy) = (pick(&d, &sel[0]), pick(&d, &sel[1]));
     let s = [_mm256_div_ps(dx, dz), _mm256_div_ps(dy, dz), _mm256_div_ps(_mm256_set1_ps(1.0), dz)];
     let o = [pick(&o, &sel[0]), pick(&o, &sel[1]), pick(&o, &sel[2])];
-    Sheared { k: [0, 1, 2], mixed: Some(sel), o, s, t_min }
+    Sheared { k: [0, 1, 2], mixed: Some(sel), o, s, t_min, spread }
 }
 
 /// A packet entry (an inner node) with at most this many of its rays still
