@@ -8,17 +8,19 @@
 //! ([`Arbiter::evaluate`]) in units of the parity bound
 //! (`verify::hits::bounds`). For each fallback rule: the share of hits it
 //! sends to double precision, and among those it keeps in single precision
-//! the largest error over the bound and how many exceed it.
+//! the largest error over the bound and how many exceed it; and the largest
+//! error over the spread term wherever that term exceeds `64 u t`
+//! (`err/term`). The rules: rtdiff's, the one before it (`2^8 u t`), one that
+//! also bounds the cosine from the plane's slope, and none.
 //!
 //! `cargo run --release --example t_error_survey -- [rays per set] mesh...`
 
 use std::sync::Arc;
 
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 use rtdiff::backends::{AccelConfig, build_tracer};
-use rtdiff::geometry::offset::gamma;
 use rtdiff::geometry::triangle::{
-    E_FLOOR, SIGN_MARGIN, T_SPREAD_MAX, WatertightRay, watertight_e_error, watertight_t_error,
+    E_FLOOR, SIGN_MARGIN, WatertightRay, spread_scale, watertight_e_error, watertight_t_error, watertight_t_imprecise,
 };
 use rtdiff::geometry::{Primitives, Ray};
 use rtdiff::perf::bench::RaySets;
@@ -33,19 +35,14 @@ const U: f32 = f32::EPSILON * 0.5;
 /// back for another reason (an uncertain sign, an unprovable `t`) or miss.
 struct Sample {
     t: f32,
-    /// `delta_e spread |1/det| / (u t)`: the rule in use.
+    /// The spread term `delta_e spread |1 / det|` in units of `u t`.
     old: f32,
-    /// The same over `u max(|o|_inf / |d|, t / sqrt 3)`, a lower bound of the parity bound's scale.
-    old_o: f32,
-    /// Product rounding only: `2 gamma(2) max_x max_y spread |1/det| / (u t)`.
-    prod: f32,
-    /// `delta_e spread |1/det|` over a lower bound of the parity bound: `32 u max(|o|, t |d|)_inf
-    /// max(|grad t|_1 / sqrt 2, 1 / (sqrt 3 |d|_inf))`.
+    /// The rule in use (`geometry::triangle::watertight_t_imprecise`).
+    now: bool,
+    /// The spread term over a lower bound of the parity bound that keeps its
+    /// cosine, from the plane's slope in the sheared frame: `32 u / sqrt 3
+    /// max(ro, t) max(sqrt(3/2) |d|_inf (|N_x| + |N_y|), |det|) / |det|`.
     grad: f32,
-    /// The rule's term in units of `u t`, to compare with the error.
-    term_ut: f32,
-    /// Shear rounding through the plane's slope: `delta_xy (|Nx| + |Ny|) |1/det| / (u t)`.
-    shear: f32,
 }
 
 fn sample(ray: &Ray, v: [Vec3; 3]) -> Option<Sample> {
@@ -84,22 +81,14 @@ fn sample(ray: &Ray, v: [Vec3; 3]) -> Option<Sample> {
     let (ba, ca) = (b - a, c - a);
     let nx = ba.y * ca.z - ba.z * ca.y;
     let ny = ba.z * ca.x - ba.x * ca.z;
-    let delta_xy = gamma(5) * (max_xt.max(max_yt) + max_zt);
-    let ut = U * t;
-    let scale = U * (ray.origin.abs().max_element() / ray.dir.length()).max(t * (1.0 / 3f32.sqrt()));
     let dz = ray.dir.abs().max_element();
-    let ro = ray.origin.abs().max_element() / dz;
-    let g1 = nx.abs() + ny.abs();
-    let lhs = de * spread;
-    let rhs = 32.0 * U * ro.max(t) * (g1 * dz / 2f32.sqrt()).max(det.abs() / 3f32.sqrt());
+    let ro = spread_scale(ray, &wr);
+    let slope = (nx.abs() + ny.abs()) * dz * 1.5f32.sqrt();
     Some(Sample {
         t,
-        grad: lhs / rhs,
-        term_ut: de * spread * inv_det.abs() / ut,
-        old: de * spread * inv_det.abs() / ut,
-        old_o: de * spread * inv_det.abs() / scale,
-        prod: 2.0 * gamma(2) * max_xt * max_yt * spread * inv_det.abs() / ut,
-        shear: delta_xy * (nx.abs() + ny.abs()) * inv_det.abs() / ut,
+        old: de * spread * inv_det.abs() / (U * t),
+        now: watertight_t_imprecise(de, [a.z, b.z, c.z], t, det, ro),
+        grad: de * spread / (32.0 / 3f32.sqrt() * U * ro.max(t) * slope.max(det.abs())),
     })
 }
 
@@ -118,13 +107,26 @@ fn t_bound(ray: &Ray, t: f32, v: [Vec3; 3]) -> f64 {
 type Rule = (&'static str, Box<dyn Fn(&Sample) -> bool>);
 
 fn rules() -> Vec<Rule> {
-    let mut r: Vec<Rule> = vec![("old 256", Box::new(|s: &Sample| s.old > T_SPREAD_MAX / U))];
-    for k in [1.0f32, 2.0, 4.0, 8.0] {
-        let name: &'static str = Box::leak(format!("grad {k}").into_boxed_str());
-        r.push((name, Box::new(move |s: &Sample| s.grad > k)));
+    vec![
+        ("rtdiff", Box::new(|s: &Sample| s.now)),
+        ("2^8 u t", Box::new(|s: &Sample| s.old > 256.0)),
+        ("slope", Box::new(|s: &Sample| s.grad > 64.0 / (32.0 / 3f32.sqrt()))),
+        ("none", Box::new(|_: &Sample| false)),
+    ]
+}
+
+/// Print one line on stdout; a closed pipe (`| head`) ends the program
+/// quietly, another write error with a message and exit status 1.
+fn line(text: String) {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    if let Err(e) = writeln!(out, "{text}") {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            std::process::exit(0);
+        }
+        eprintln!("t_error_survey: cannot write to stdout: {e}");
+        std::process::exit(1);
     }
-    r.push(("none", Box::new(move |_: &Sample| false)));
-    r
 }
 
 fn main() -> rtdiff::Result<()> {
@@ -134,10 +136,10 @@ fn main() -> rtdiff::Result<()> {
         args.remove(0);
     }
     let rules = rules();
-    println!(
-        "{:<12} {:<14} {:>7} | rule: fallback %, max err/bound kept, kept beyond 1, kept beyond 0.5",
-        "mesh", "set", "hits"
-    );
+    line(format!(
+        "{:<12} {:<14} {:>7} {:>8} | per rule: hits decided in f64 %, max error / bound of the others, how many beyond 1, beyond 0.5",
+        "mesh", "set", "hits", "err/term"
+    ));
     for path in &args {
         let ctx = rtdiff::rays::load_context(std::path::Path::new(path))?;
         let prims = ctx.prims.clone();
@@ -172,8 +174,8 @@ fn main() -> rtdiff::Result<()> {
                 let exact = arb.evaluate(r, h.prim);
                 let abs_err = (s.t as f64 - exact.t_f64).abs();
                 let err = abs_err / t_bound(r, s.t, tri.v);
-                if s.term_ut > 64.0 {
-                    err_per_term = err_per_term.max(abs_err / (s.term_ut as f64 * (U as f64) * s.t as f64));
+                if s.old > 64.0 {
+                    err_per_term = err_per_term.max(abs_err / (s.old as f64 * (U as f64) * s.t as f64));
                 }
                 for (i, (_, rule)) in rules.iter().enumerate() {
                     if rule(&s) {
@@ -185,10 +187,9 @@ fn main() -> rtdiff::Result<()> {
                     }
                 }
             }
-            let _ = DVec3::ZERO;
-            print!("{name:<12} {set:<14} {n:>7} {err_per_term:.3} |");
+            let mut row = format!("{name:<12} {set:<14} {n:>7} {err_per_term:>8.3} |");
             for (i, (rn, _)) in rules.iter().enumerate() {
-                print!(
+                row += &format!(
                     " {rn}: {:.2}% {:.2} {} {};",
                     100.0 * fell[i] as f64 / n.max(1) as f64,
                     worst[i],
@@ -196,7 +197,7 @@ fn main() -> rtdiff::Result<()> {
                     half[i]
                 );
             }
-            println!();
+            line(row);
         }
     }
     Ok(())

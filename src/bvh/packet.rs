@@ -17,7 +17,7 @@ use glam::Vec3;
 
 use crate::geometry::offset::gamma;
 use crate::geometry::triangle::{
-    E_FLOOR, SIGN_MARGIN, SpreadScale, T_ETA, T_SPREAD_MAX, TriangleKernel, WatertightRay,
+    E_FLOOR, SIGN_MARGIN, T_ETA, T_SPREAD_MAX, TriangleKernel, WatertightRay, spread_scale,
 };
 use crate::geometry::{Hit, Ray};
 
@@ -65,8 +65,8 @@ impl Tri4 {
 pub struct LeafRay {
     /// `origin[kx], origin[ky], origin[kz], sx, sy, -sz` (the lane tests
     /// shear `o - v`, the negated coordinates, see `watertight_lanes!`), then
-    /// the ray's [`SpreadScale`] `ro, dq`.
-    c: [f32; 8],
+    /// the ray's [`spread_scale`].
+    c: [f32; 7],
     /// Byte offsets of the rows of axes `kx, ky, kz` in a vertex's three
     /// rows of [`Tri4::v`]: `16 k`, each below 48 (made only by [`Self::new`]).
     rows: [usize; 3],
@@ -74,7 +74,7 @@ pub struct LeafRay {
 
 impl LeafRay {
     /// A stand-in for tests that take no shear (Moller-Trumbore).
-    pub const UNUSED: Self = Self { c: [0.0; 8], rows: [0, 16, 32] };
+    pub const UNUSED: Self = Self { c: [0.0; 7], rows: [0, 16, 32] };
 
     /// The leaf constants of `ray` (whose direction must not be the zero vector).
     #[inline]
@@ -82,8 +82,8 @@ impl LeafRay {
         let wr = WatertightRay::of(ray.dir.as_ref());
         let o: &[f32; 3] = ray.origin.as_ref();
         let ([kx, ky, kz], s) = (wr.k, wr.s);
-        let sc = SpreadScale::of(ray, &wr);
-        Self { c: [o[kx], o[ky], o[kz], s.x, s.y, -s.z, sc.ro, sc.dq], rows: wr.k.map(|a| 16 * a) }
+        let ro = spread_scale(ray, &wr);
+        Self { c: [o[kx], o[ky], o[kz], s.x, s.y, -s.z, ro], rows: wr.k.map(|a| 16 * a) }
     }
 
     /// The shear for the scalar routines: [`WatertightRay::new`]'s answer for
@@ -412,16 +412,10 @@ macro_rules! watertight_lanes {
             return (0, zero_mask, z, z, z);
         }
         // The edge functions' share of t's error against the parity bound
-        // (`watertight_t_imprecise`, same operation order; its `x, y` are
-        // negated here, so `nx, ny` are too), before `t_max` as in the scalar
+        // (`watertight_t_imprecise`, same operation order), before `t_max` as in the scalar
         // routine: lanes where it may be too large go to the scalar routine.
         let spread = $add($add(abs($sub(az, t)), abs($sub(bz, t))), abs($sub(cz, t)));
-        let (ba_x, ba_y, ba_z) = ($sub(bx, ax), $sub(by, ay), $sub(bz, az));
-        let (ca_x, ca_y, ca_z) = ($sub(cx, ax), $sub(cy, ay), $sub(cz, az));
-        let nx = $sub($mul(ba_y, ca_z), $mul(ba_z, ca_y));
-        let ny = $sub($mul(ba_z, ca_x), $mul(ba_x, ca_z));
-        let slope = $mul($add(abs(nx), abs(ny)), $lane(7));
-        let allowed = $mul($mul($set1(T_SPREAD_MAX), $max($lane(6), t)), $max(slope, abs(det)));
+        let allowed = $mul($mul($set1(T_SPREAD_MAX), $max($lane(6), t)), abs(det));
         let imprecise = $and($gt($mul(delta_e, spread), allowed), past_min);
         let zero_mask = zero_mask | $movemask(imprecise) as u32;
         let ok = $andnot(imprecise, $and(past_min, $le(t, $set1($ray.t_max))));
@@ -742,7 +736,7 @@ fn moller_trumbore_pair(pq: &[Tri4], ray: &Ray) -> (u32, [[f32; 2 * PW]; 3]) {
 #[cfg(all(test, target_arch = "x86_64"))]
 mod tests {
     use super::*;
-    use crate::geometry::triangle::{SQRT_3_2, intersect_moller_trumbore};
+    use crate::geometry::triangle::intersect_moller_trumbore;
     use crate::rng::Pcg32;
 
     /// A coordinate that is now and then special (0, -0, subnormal, huge,
@@ -817,8 +811,8 @@ mod tests {
             assert_eq!(got.k, wr.k, "{d:?}");
             assert_eq!(got.s.to_array().map(f32::to_bits), wr.s.to_array().map(f32::to_bits), "{d:?}");
             let o = origin.to_array();
-            let (ro, dq) = (origin.abs().max_element() * wr.s.z.abs(), d[wr.k[2]].abs() * SQRT_3_2);
-            let expect = [o[wr.k[0]], o[wr.k[1]], o[wr.k[2]], wr.s.x, wr.s.y, -wr.s.z, ro, dq];
+            let ro = origin.abs().max_element() * wr.s.z.abs();
+            let expect = [o[wr.k[0]], o[wr.k[1]], o[wr.k[2]], wr.s.x, wr.s.y, -wr.s.z, ro];
             assert_eq!(lr.c.map(f32::to_bits), expect.map(f32::to_bits), "{d:?}");
             assert_eq!(lr.rows, wr.k.map(|a| 16 * a), "{d:?}");
             checked += 1;

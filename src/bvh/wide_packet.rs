@@ -27,7 +27,7 @@
 use std::mem::MaybeUninit;
 
 use crate::geometry::offset::gamma;
-use crate::geometry::triangle::{E_FLOOR, SIGN_MARGIN, SQRT_3_2, T_ETA, T_SPREAD_MAX, TriangleKernel};
+use crate::geometry::triangle::{E_FLOOR, SIGN_MARGIN, T_ETA, T_SPREAD_MAX, TriangleKernel};
 use crate::geometry::{Hit, Ray};
 
 use super::packet::LeafRay;
@@ -324,8 +324,8 @@ struct Sheared {
     o: [std::arch::x86_64::__m256; 3],
     s: [std::arch::x86_64::__m256; 3],
     t_min: std::arch::x86_64::__m256,
-    /// The rays' [`SpreadScale`](crate::geometry::triangle::SpreadScale)s, `ro` and `dq` (zero for the tests that take no shear).
-    spread: [std::arch::x86_64::__m256; 2],
+    /// The rays' [`spread_scale`](crate::geometry::triangle::spread_scale)s (zero for the tests that take no shear).
+    spread: std::arch::x86_64::__m256,
 }
 
 /// Vertex `j` of lane `l` of `p` on each ray's permuted axes, the rays'
@@ -476,15 +476,7 @@ unsafe fn tri_x8(
             _mm256_add_ps(abs(_mm256_sub_ps(az, t)), abs(_mm256_sub_ps(bz, t))),
             abs(_mm256_sub_ps(cz, t)),
         );
-        let (ba_x, ba_y, ba_z) = (_mm256_sub_ps(bx, ax), _mm256_sub_ps(by, ay), _mm256_sub_ps(bz, az));
-        let (ca_x, ca_y, ca_z) = (_mm256_sub_ps(cx, ax), _mm256_sub_ps(cy, ay), _mm256_sub_ps(cz, az));
-        let nx = _mm256_sub_ps(_mm256_mul_ps(ba_y, ca_z), _mm256_mul_ps(ba_z, ca_y));
-        let ny = _mm256_sub_ps(_mm256_mul_ps(ba_z, ca_x), _mm256_mul_ps(ba_x, ca_z));
-        let slope = _mm256_mul_ps(_mm256_add_ps(abs(nx), abs(ny)), sh.spread[1]);
-        let allowed = _mm256_mul_ps(
-            _mm256_mul_ps(_mm256_set1_ps(T_SPREAD_MAX), _mm256_max_ps(sh.spread[0], t)),
-            _mm256_max_ps(slope, abs(det)),
-        );
+        let allowed = _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(T_SPREAD_MAX), _mm256_max_ps(sh.spread, t)), abs(det));
         let imprecise = _mm256_and_ps(_mm256_cmp_ps::<_CMP_GT_OS>(_mm256_mul_ps(delta_e, spread), allowed), past_min);
         let zero_mask = zero_mask | _mm256_movemask_ps(imprecise) as u32;
         let ok = _mm256_andnot_ps(imprecise, _mm256_and_ps(past_min, _mm256_cmp_ps::<_CMP_LE_OS>(t, t_max)));
@@ -834,7 +826,7 @@ fn rays8<K: TriangleKernel>(soa: &Soa) -> Sheared {
     }
     let (d, o, t_min) = gather8(soa);
     let zero = std::arch::x86_64::_mm256_setzero_ps();
-    Sheared { k: [0, 1, 2], mixed: None, o, s: d, t_min, spread: [zero; 2] }
+    Sheared { k: [0, 1, 2], mixed: None, o, s: d, t_min, spread: zero }
 }
 
 /// The packet's directions, origins and `t_min` as rows of eight lanes.
@@ -864,13 +856,10 @@ fn shear8(soa: &Soa) -> Sheared {
     let dz = _mm256_blendv_ps(_mm256_blendv_ps(d[0], d[1], z1), d[2], z2);
     // kx = kz + 1 and ky = kz + 2 (mod 3), swapped where dir[kz] < 0.
     let neg = _mm256_cmp_ps::<_CMP_LT_OQ>(dz, _mm256_setzero_ps());
-    // `SpreadScale::of`, same operations: `|o|_inf |1 / dz|` and `|dz| sqrt(3/2)`.
+    // `spread_scale`, same operations: `|o|_inf |1 / dz|`.
     let abs_o = o.map(|x| _mm256_andnot_ps(sign, x));
     let o_inf = _mm256_max_ps(_mm256_max_ps(abs_o[0], abs_o[1]), abs_o[2]);
-    let spread = [
-        _mm256_mul_ps(o_inf, _mm256_andnot_ps(sign, _mm256_div_ps(_mm256_set1_ps(1.0), dz))),
-        _mm256_mul_ps(_mm256_andnot_ps(sign, dz), _mm256_set1_ps(SQRT_3_2)),
-    ];
+    let spread = _mm256_mul_ps(o_inf, _mm256_andnot_ps(sign, _mm256_div_ps(_mm256_set1_ps(1.0), dz)));
     let uniform = |m: __m256| matches!(_mm256_movemask_ps(m), 0 | 0xff);
     if uniform(z0) && uniform(z1) && uniform(neg) {
         let kz = if _mm256_movemask_ps(z0) != 0 {

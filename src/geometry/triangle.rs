@@ -210,16 +210,8 @@ pub fn intersect_watertight(ray: &Ray, wr: &WatertightRay, v0: Vec3, v1: Vec3, v
     // ([`T_SPREAD_MAX`]: thin triangles seen at an angle) is decided in
     // double precision, before `t_max`: that bound shrinks as a traversal
     // finds hits, and the answer must not depend on their order.
-    let scale = SpreadScale::of(ray, wr);
-    if watertight_t_imprecise(
-        watertight_e_error(max_xt, max_yt, max_zt),
-        [ax, ay, az],
-        [bx, by, bz],
-        [cx, cy, cz],
-        t,
-        det,
-        scale,
-    ) {
+    let ro = spread_scale(ray, wr);
+    if watertight_t_imprecise(watertight_e_error(max_xt, max_yt, max_zt), [az, bz, cz], t, det, ro) {
         return intersect_watertight_f64(ray, wr, v0, v1, v2);
     }
     let within_max = t <= ray.t_max;
@@ -267,9 +259,9 @@ pub const E_FLOOR: f32 = 1.0 / (1u128 << 100) as f32;
 pub const T_ETA: f32 = f32::MIN_POSITIVE;
 
 /// How large the edge functions' share of the watertight test's distance
-/// error may be against a lower bound of the parity bound before the hit is
-/// decided in double precision instead: `2^6 u = 2^-18` (`u = 2^-24`), see
-/// [`watertight_t_imprecise`].
+/// error may be, in units of a lower bound of the parity bound's scale,
+/// before the hit is decided in double precision instead: `2^7 u = 2^-17`
+/// (`u = 2^-24`), see [`watertight_t_imprecise`].
 ///
 /// The single-precision distance is the barycentric blend `sum e_i z_i / det`
 /// of the vertices' sheared distances `z_i` along the ray. Edge-function
@@ -281,53 +273,36 @@ pub const T_ETA: f32 = f32::MIN_POSITIVE;
 /// what carried regr01.obj's 48 distances beyond the parity bound
 /// (`verify::hits::bounds`), every one with the term above `3e4 u t`.
 ///
-/// The parity bound on `t` is `32 u (|o|_inf + |p|_inf) / (c |d|)` (`p` the
-/// hit point, `c` the cosine of the ray and the plane's normal). Without the
-/// normal in real space, the test bounds it from below with what it has:
-/// `|o|_inf + |p|_inf >= |d|_inf max(|o|_inf / |d|_inf, t)`, and
-/// `1 / (c |d|) >= max(|grad t|_2, 1 / |d|_2)`, where `grad t = -(N_x, N_y) /
-/// N_z` is the slope of the plane in the sheared frame (`N` the cross product
-/// of two sheared edges, `N_z = det`; in that frame the ray is the `z` axis,
-/// so this is exact) and `|grad t|_2 >= |grad t|_1 / sqrt 2`, `|d|_2 <= sqrt 3
-/// |d|_inf`. So the parity bound is at least `32 u / sqrt 3 max(|o|_inf /
-/// |d|_inf, t) max(sqrt(3/2) |d|_inf (|N_x| + |N_y|), |det|) / |det|`, and the
-/// test falls back when the spread term exceeds `2^6 u / (32 u / sqrt 3) =
-/// 3.46` times this lower bound.
+/// The parity bound on `t` is `32 u (|o|_inf + |p|_inf) / (c |d|_2)` (`p` the
+/// hit point, `c <= 1` the cosine of the ray and the plane's normal), and
+/// `|o|_inf + |p|_inf >= max(|o|_inf, t |d|_inf)`, `|d|_2 <= sqrt 3 |d|_inf`:
+/// it is at least `32 u / sqrt 3 max(|o|_inf / |d|_inf, t) = 18.5 u max(ro,
+/// t)`. The test falls back when the spread term exceeds `128 u max(ro, t)`.
 ///
 /// Not a proof: `delta_e` is a worst case far above the errors that occur.
 /// Measured instead (`examples/t_error_survey.rs`: the race's camera,
 /// incoherent and shadow rays and every parity set, scaled ones included, on
 /// suzanne, dragon_87k, teapot, bunny and regr01, 20,000 rays a set, against
 /// the exact hit): wherever the spread term exceeds `64 u t`, the error is at
-/// most 0.121 of it, so below 0.42 of the parity bound at this threshold; and
-/// with no fallback at all regr01's edge, vertex, grazing and scaled rays go
-/// up to 23 times beyond it. Double precision decides 0.15% of suzanne's
-/// incoherent hits and 0.01% of its shadow hits (the rule before, `2^8 u t`
-/// against `t` alone: 6.4% and 10%), 0.2% to 0.4% of dragon_87k's, and on
-/// regr01 (large thin triangles seen from close by) 7% to 14%.
-pub const T_SPREAD_MAX: f32 = 64.0 * (f32::EPSILON * 0.5);
+/// most 0.121 of it, so below `15.5 u max(ro, t)`, 0.84 of the bound's lower
+/// bound, at this threshold; with no fallback at all, regr01's edge, vertex,
+/// grazing and scaled rays go up to 23 times beyond the bound. Double
+/// precision decides about 1% of the hits of the race's camera, incoherent
+/// and shadow rays on suzanne, dragon_87k and teapot (the rule before,
+/// `2^8 u t` against `t` alone: suzanne 0.4%, 6.4%, 10%), 15% to 34% of
+/// grazing hits, and on regr01 (large thin triangles seen from close by) 7%
+/// to 15%. The cosine `c` is left out: bounding it from the plane's slope in
+/// the sheared frame cut suzanne's fallbacks to 0.15% but cost 4% to 7% more
+/// instructions per ray.
+pub const T_SPREAD_MAX: f32 = 128.0 * (f32::EPSILON * 0.5);
 
-/// `sqrt(3 / 2)`, rounded to `f32` (see [`T_SPREAD_MAX`]).
-pub const SQRT_3_2: f32 = 1.224_744_9;
-
-/// The per-ray factors of [`watertight_t_imprecise`]'s lower bound of the
-/// parity bound: `|o|_inf / |d|_inf` and `sqrt(3/2) |d|_inf`, computed the
-/// same way by the scalar test and the SIMD leaf tests in `bvh`.
-#[derive(Clone, Copy, Debug)]
-pub struct SpreadScale {
-    /// `|o|_inf |s_z|` (`= |o|_inf / |d|_inf`, rounded once).
-    pub ro: f32,
-    /// `|d_kz| sqrt(3/2)` (`|d_kz| = |d|_inf`, rounded once).
-    pub dq: f32,
-}
-
-impl SpreadScale {
-    /// The factors of `ray`, whose shear is `wr`.
-    #[inline(always)]
-    pub fn of(ray: &Ray, wr: &WatertightRay) -> Self {
-        let o = ray.origin.abs();
-        Self { ro: o.x.max(o.y).max(o.z) * wr.s.z.abs(), dq: ray.dir[wr.k[2]].abs() * SQRT_3_2 }
-    }
+/// `|o|_inf / |d|_inf` of a ray with shear `wr`, computed as `|o|_inf |s_z|`
+/// (one rounding), the same way by the scalar test and the SIMD leaf tests
+/// in `bvh` (see [`T_SPREAD_MAX`]).
+#[inline(always)]
+pub fn spread_scale(ray: &Ray, wr: &WatertightRay) -> f32 {
+    let o = ray.origin.abs();
+    o.x.max(o.y).max(o.z) * wr.s.z.abs()
 }
 
 /// `a > b ? a : b`, SSE's `max` (its second operand when either is NaN), so
@@ -339,29 +314,14 @@ fn max_ps(a: f32, b: f32) -> f32 {
 
 /// Whether the watertight test's distance `t` may be too imprecise for the
 /// parity bound ([`T_SPREAD_MAX`], which derives the rule): `delta_e (|z_0 -
-/// t| + |z_1 - t| + |z_2 - t|) > T_SPREAD_MAX max(ro, t) max(dq (|N_x| +
-/// |N_y|), |det|)`, from the edge-function bound `delta_e`, the sheared
-/// vertices `a, b, c` (`x, y, z`), the distance, `det` and the ray's
-/// [`SpreadScale`]. The SIMD leaf tests in `bvh` compute it with the same
-/// operations in the same order (their `x, y` negated, which leaves every
-/// magnitude here unchanged).
+/// t| + |z_1 - t| + |z_2 - t|) > T_SPREAD_MAX max(ro, t) |det|`, from the
+/// edge-function bound `delta_e`, the sheared distances `z` of the vertices,
+/// the distance, `det` and the ray's [`spread_scale`] `ro`. The SIMD leaf
+/// tests in `bvh` compute it with the same operations in the same order.
 #[inline(always)]
-pub fn watertight_t_imprecise(
-    delta_e: f32,
-    a: [f32; 3],
-    b: [f32; 3],
-    c: [f32; 3],
-    t: f32,
-    det: f32,
-    scale: SpreadScale,
-) -> bool {
-    let spread = (a[2] - t).abs() + (b[2] - t).abs() + (c[2] - t).abs();
-    let (ba_x, ba_y, ba_z) = (b[0] - a[0], b[1] - a[1], b[2] - a[2]);
-    let (ca_x, ca_y, ca_z) = (c[0] - a[0], c[1] - a[1], c[2] - a[2]);
-    let nx = ba_y * ca_z - ba_z * ca_y;
-    let ny = ba_z * ca_x - ba_x * ca_z;
-    let slope = (nx.abs() + ny.abs()) * scale.dq;
-    delta_e * spread > T_SPREAD_MAX * max_ps(scale.ro, t) * max_ps(slope, det.abs())
+pub fn watertight_t_imprecise(delta_e: f32, z: [f32; 3], t: f32, det: f32, ro: f32) -> bool {
+    let spread = (z[0] - t).abs() + (z[1] - t).abs() + (z[2] - t).abs();
+    delta_e * spread > T_SPREAD_MAX * max_ps(ro, t) * det.abs()
 }
 
 /// Bound on the absolute error of the watertight test's single-precision
