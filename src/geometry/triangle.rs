@@ -285,13 +285,14 @@ pub const T_ETA: f32 = f32::MIN_POSITIVE;
 /// suzanne, dragon_87k, teapot, bunny and regr01, 20,000 rays a set, against
 /// the exact hit): wherever the spread term exceeds `64 u t`, the error is at
 /// most 0.121 of it, so below `15.5 u max(ro, t)`, 0.84 of the bound's lower
-/// bound, at this threshold; with no fallback at all, regr01's edge, vertex,
-/// grazing and scaled rays go up to 23 times beyond the bound. Double
-/// precision decides about 1% of the hits of the race's camera, incoherent
-/// and shadow rays on suzanne, dragon_87k and teapot (the rule before,
+/// bound, at this threshold (the hits kept in single precision came to at
+/// most 0.15 of the bound); with no fallback at all, regr01's edge, vertex,
+/// grazing and scaled rays go up to 23 times beyond it. Double precision
+/// decides 0.3% to 3% of the hits of the race's camera, incoherent and
+/// shadow rays on suzanne, dragon_87k, teapot and bunny (the rule before,
 /// `2^8 u t` against `t` alone: suzanne 0.4%, 6.4%, 10%), 15% to 34% of
-/// grazing hits, and on regr01 (large thin triangles seen from close by) 7%
-/// to 15%. The cosine `c` is left out: bounding it from the plane's slope in
+/// grazing hits, and on regr01 (large thin triangles seen from close by)
+/// 7% to 26%. The cosine `c` is left out: bounding it from the plane's slope in
 /// the sheared frame cut suzanne's fallbacks to 0.15% but cost 4% to 7% more
 /// instructions per ray.
 pub const T_SPREAD_MAX: f32 = 128.0 * (f32::EPSILON * 0.5);
