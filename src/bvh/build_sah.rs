@@ -429,7 +429,8 @@ impl SahSplit {
             *t = Transposed::of(&b.b);
             run = run.union(t);
             rn += b.count;
-            // (The product the cost below adds: Rust does not fuse `a * b + c * d`.)
+            // The right term of the cost below, as a product made here: the
+            // same bits as inside the sum (Rust does not fuse multiply-adds).
             *rc = run.half_area() * block_slots(rn, shift);
         }
         let mut best_cost = Vec3A::INFINITY;
