@@ -16,7 +16,7 @@ use glam::{UVec4, Vec3A};
 use super::config::Builder;
 use crate::geometry::{Aabb, Primitives};
 
-use super::build::{BinaryBvh, BoxA, BuildInput, PrimRef, Split, Splitter, build_with, centroid_bounds_of};
+use super::build::{BinaryBvh, BoxA, BuildInput, PrimRef, Split, Splitter, build_with, doubled_centroid_bounds_of};
 
 /// Cost of visiting one node, relative to [`INTERSECTION_COST`].
 pub const TRAVERSAL_COST: f32 = 1.0;
@@ -49,7 +49,7 @@ pub struct SahSplit {
     pub block: u32,
 }
 
-/// Bin of centroid `c` on every axis: `trunc(min((c - cmin) * scale, last))`,
+/// Bin of (doubled) centroid `c` on every axis: `trunc(min((c - cmin) * scale, last))`,
 /// the same per-lane arithmetic as the partition step uses on one axis.
 /// The argument is in `[0, last]`, so truncation to an integer is exact.
 #[inline(always)]
@@ -89,7 +89,7 @@ impl Splitter for SahSplit {
             // shortcut, and the build runs 10% fewer instructions.)
             return None;
         }
-        let cb = centroids.unwrap_or_else(|| centroid_bounds_of(idx));
+        let cb = centroids.unwrap_or_else(|| doubled_centroid_bounds_of(idx));
         let ext = cb.max - cb.min;
         // Small nodes need no more bins than primitives (saves clearing empty bins).
         let nb = self.bins.clamp(2, SAH_MAX_BINS).min(n.max(4));
@@ -105,8 +105,7 @@ thread_local! {
         std::cell::RefCell::new(Scratch {
             bins: Vec::new(),
             soa: Vec::new(),
-            right_area: Vec::new(),
-            right_count: Vec::new(),
+            right_cost: Vec::new(),
             bins2: Vec::new(),
         })
     };
@@ -144,10 +143,10 @@ struct Scratch {
     bins: Vec<Bin>,
     /// The bins transposed for the sweeps.
     soa: Vec<Transposed>,
-    /// Per bin `s`, lane `a`: half area of the union of bins `s..` of axis `a`.
-    right_area: Vec<Vec3A>,
-    /// Per bin `s`, lane `a`: primitives in bins `s..` of axis `a`, in whole blocks.
-    right_count: Vec<Vec3A>,
+    /// Per bin `s`, lane `a`: the right side's term of the cost of the
+    /// split before bin `s` of axis `a`, the half area of the union of bins
+    /// `s..` times their primitives in whole blocks.
+    right_cost: Vec<Vec3A>,
     /// A second set of bins for the odd primitives of [`bin_into2`].
     bins2: Vec<Bin>,
 }
@@ -204,11 +203,17 @@ impl Transposed {
         Self { lo: [0, 1, 2].map(|c| self.lo[c].min(o.lo[c])), hi: [0, 1, 2].map(|c| self.hi[c].max(o.hi[c])) }
     }
 
-    /// Half surface area of each lane's box (0 for an empty box): the same
-    /// arithmetic as [`BoxA::half_area`], lane by lane.
+    /// Half surface area of each lane's box: the same arithmetic as
+    /// [`BoxA::half_area`], lane by lane, but +inf for an empty box (its
+    /// extents are -inf; [`BoxA::half_area`] clamps them to 0). A split
+    /// with an empty side (0 slots) then costs `inf * 0 + ...`, NaN, which
+    /// never compares below the best cost: the sweep needs no test of the
+    /// sides' counts (nor of the axis, whose coinciding centroids all fall in
+    /// bin 0). A box that is not empty has extents of at least 0, so the
+    /// areas the sweeps compare are those of the clamped form.
     #[inline(always)]
     fn half_area(&self) -> Vec3A {
-        let [x, y, z] = [0, 1, 2].map(|c| (self.hi[c] - self.lo[c]).max(Vec3A::ZERO));
+        let [x, y, z] = [0, 1, 2].map(|c| self.hi[c] - self.lo[c]);
         x * y + y * z + z * x
     }
 }
@@ -228,7 +233,7 @@ fn bin_into(refs: &[PrimRef], bins: &mut [Bin], cmin: Vec3A, scale: Vec3A, lastf
 #[inline(always)]
 fn bin_one(b: BoxA, bins: &mut [Bin], cmin: Vec3A, scale: Vec3A, lastf: Vec3A) {
     let last = bins.len() - 1;
-    let k = bins_of((b.min + b.max) * 0.5, cmin, scale, lastf);
+    let k = bins_of(b.min + b.max, cmin, scale, lastf);
     for (a, &ka) in k.iter().enumerate() {
         // bins_of returns values in 0..bins.len(); the clamp only lets the
         // compiler drop the bounds check.
@@ -259,7 +264,7 @@ fn bin_into2(refs: &[PrimRef], bins: &mut [Bin], bins2: &mut [Bin], cmin: Vec3A,
     bins.iter_mut().zip(bins2.iter()).for_each(|(x, y)| x.merge(y));
 }
 
-/// In-place partition of `idx` by `side(centroid)` (1: left); returns the
+/// In-place partition of `idx` by `side(doubled centroid)` (1: left); returns the
 /// left count. No branch per reference (Lomuto's scheme with the side as the
 /// increment of the left end: each reference is swapped to the left end,
 /// which advances when it belongs left): the side of a reference is
@@ -290,7 +295,7 @@ fn partition_branchless(idx: &mut [PrimRef], side: impl Fn(Vec3A) -> u32) -> usi
     let mut j = 0usize;
     for i in 0..idx.len() {
         let x = idx[i];
-        let left = side(x.centroid());
+        let left = side(x.doubled_centroid());
         idx[i] = idx[j];
         idx[j] = x;
         j += left as usize;
@@ -369,13 +374,12 @@ impl SahSplit {
         let last = nb as u32 - 1;
         debug_assert!(self.block.is_power_of_two(), "leaf block {} is not a power of two", self.block);
         let shift = self.block.trailing_zeros();
-        let Scratch { bins, soa, right_area, right_count, bins2 } = scratch;
+        let Scratch { bins, soa, right_cost, bins2 } = scratch;
         // The bins are accumulated into, so they start empty; the sweep
         // arrays are written before they are read and only need the room.
         grow(bins, nb, Bin::EMPTY);
         bins[..nb].fill(Bin::EMPTY);
-        grow(right_area, nb, Vec3A::ZERO);
-        grow(right_count, nb, Vec3A::ZERO);
+        grow(right_cost, nb, Vec3A::ZERO);
         grow(soa, nb, Transposed::EMPTY);
         let lastf = Vec3A::splat(last as f32);
         let bins = &mut bins[..nb];
@@ -415,36 +419,35 @@ impl SahSplit {
         // iterators: indexing four arrays of independent lengths kept six
         // bounds checks in each sweep step.
         let soa = &mut soa[..nb];
-        let (right_area, right_count) = (&mut right_area[..nb], &mut right_count[..nb]);
-        for (t, b) in soa.iter_mut().zip(bins.iter()) {
-            *t = Transposed::of(&b.b);
-        }
+        let right_cost = &mut right_cost[..nb];
+        // The bins are transposed as the right-to-left sweep reaches them
+        // (bin 0, which it does not reach, apart).
+        soa[0] = Transposed::of(&bins[0].b);
         let mut run = Transposed::EMPTY;
         let mut rn = UVec4::ZERO;
-        for (((t, b), ra), rc) in
-            soa.iter().zip(bins.iter()).zip(right_area.iter_mut()).zip(right_count.iter_mut()).skip(1).rev()
-        {
+        for ((t, b), rc) in soa.iter_mut().zip(bins.iter()).zip(right_cost.iter_mut()).skip(1).rev() {
+            *t = Transposed::of(&b.b);
             run = run.union(t);
             rn += b.count;
-            *ra = run.half_area();
-            *rc = block_slots(rn, shift);
+            // The right term of the cost below, as a product made here: the
+            // same bits as inside the sum (Rust does not fuse multiply-adds).
+            *rc = run.half_area() * block_slots(rn, shift);
         }
-        // Axes whose centroids all coincide cannot be split.
-        let axis_ok = scale.cmpgt(Vec3A::ZERO);
         let mut best_cost = Vec3A::INFINITY;
         let mut best_bin = Vec3A::ZERO;
         let mut run = Transposed::EMPTY;
         let mut ln = UVec4::ZERO;
         // Bin `s` as a float, counted alongside (an exact integer).
         let mut sf = Vec3A::ZERO;
-        for ((t, b), (&ra, &rb)) in soa.iter().zip(bins.iter()).zip(right_area.iter().zip(right_count.iter()).skip(1)) {
+        for ((t, b), &rc) in soa.iter().zip(bins.iter()).zip(right_cost.iter().skip(1)) {
             run = run.union(t);
             ln += b.count;
-            let lb = block_slots(ln, shift);
-            let cost = run.half_area() * lb + ra * rb;
-            // Both sides non-empty, and strictly cheaper: the first minimum per axis wins.
-            let better = cost.cmplt(best_cost) & axis_ok & lb.cmpgt(Vec3A::ZERO) & rb.cmpgt(Vec3A::ZERO);
-            best_cost = Vec3A::select(better, cost, best_cost);
+            let cost = run.half_area() * block_slots(ln, shift) + rc;
+            // Strictly cheaper (a split with an empty side costs NaN, see
+            // `Transposed::half_area`): the first minimum per axis wins.
+            // (`min` keeps `best_cost` for NaN and for ties, as the select did.)
+            let better = cost.cmplt(best_cost);
+            best_cost = cost.min(best_cost);
             best_bin = Vec3A::select(better, sf, best_bin);
             sf += Vec3A::ONE;
         }
@@ -469,7 +472,6 @@ impl SahSplit {
         let (left, right) = bins.split_at(s + 1);
         let lb = left.iter().fold(BoxA::EMPTY, |b, k| b.union(k.b[axis])).aabb();
         let rb = right.iter().fold(BoxA::EMPTY, |b, k| b.union(k.b[axis])).aabb();
-        let nl = left.iter().map(|k| k.count[axis] as usize).sum::<usize>();
         // `bins_of(c)[axis] <= s`, i.e. `trunc(min(x, last)) <= s` for the
         // non-negative `x = (c - cmin) * scale`, is `x < s + 1` (an exact
         // integer no greater than `last`), evaluated with the same per-lane
@@ -477,11 +479,11 @@ impl SahSplit {
         let limit = Vec3A::splat((s + 1) as f32);
         let side = |c: Vec3A| ((c - cb.min) * scale).cmplt(limit).bitmask() >> axis & 1;
         let i = if n >= CHUNKED_PARTITION { partition_chunked(idx, side) } else { partition_branchless(idx, side) };
-        debug_assert_eq!(i, nl);
+        debug_assert_eq!(i, left.iter().map(|k| k.count[axis] as usize).sum::<usize>(), "the bins' left count");
         // The children's centroid boxes are left to the children (one
-        // read-only pass each, `centroid_bounds_of`, and none for a child of
+        // read-only pass each, `doubled_centroid_bounds_of`, and none for a child of
         // at most `block` references, which becomes a leaf before needing it).
-        Some(Split { mid: nl, bounds: Some((lb, rb)) })
+        Some(Split { mid: i, bounds: Some((lb, rb)) })
     }
 }
 
@@ -513,7 +515,7 @@ mod tests {
                         PrimRef::new(id, BoxA { min: c, max: c })
                     })
                     .collect();
-                let side = |c: Vec3A| u32::from(c.x < share);
+                let side = |c: Vec3A| u32::from(c.x < 2.0 * share);
                 let mut seq = refs.clone();
                 let ns = partition_branchless(&mut seq, side);
                 let mut orders = Vec::new();

@@ -125,7 +125,8 @@ fn entry(node: &Node, children: Option<(&Entry, &Entry)>, block: u32) -> Entry {
 /// cheapest `cl[j] + cr[i - j]`, and `j = 1` when no sum compares below the
 /// first (every cost infinite or NaN, from box areas that overflow `f32`), so
 /// that `emit` always splits into `1..i` lanes (a 0 there made it ask for
-/// lane count 0 and index `cost[n][0 - 1]`). Index 0 and 1 are not used.
+/// lane count 0 and index `cost[n][0 - 1]`). Index 0 and 1 are not used
+/// (and hold anything).
 ///
 /// A min-plus convolution, lane-parallel over `i` (one pass per `j`,
 /// compare and select, no branches), in two SSE2 halves of four lanes on
@@ -141,11 +142,9 @@ fn both_children(cl: &Row, cr: &Row) -> (Row, [u8; WIDTH + 1]) {
     #[cfg(not(target_arch = "x86_64"))]
     shifted[WIDTH + 1..].copy_from_slice(&cr[1..]);
     // Lane `i - 1` holds `i`. j = 1 is taken unconditionally (see above).
-    let mut dist = [0.0f32; WIDTH];
-    let mut split = [1u32; WIDTH];
     #[cfg(target_arch = "x86_64")]
     // SAFETY: SSE2 is part of the x86_64 baseline. The two unaligned loads
-    // read `cr[1..9]`; the stores write the two 8-lane arrays.
+    // read `cr[1..9]`; the stores write `d[1..9]` and `s[1..9]`.
     unsafe {
         // The loop below in two 4-lane halves (rustc left it scalar: about
         // 110 instructions per call on the additions alone). `min_ps(c, d)`
@@ -200,13 +199,21 @@ fn both_children(cl: &Row, cr: &Row) -> (Row, [u8; WIDTH + 1]) {
         step!(5, window!(inf, r0, 3));
         step!(6, window!(inf, r0, 2));
         step!(7, window!(inf, r0, 1));
-        _mm_storeu_ps(dist.as_mut_ptr(), d_lo);
-        _mm_storeu_ps(dist.as_mut_ptr().add(4), d_hi);
-        _mm_storeu_si128(split.as_mut_ptr().cast(), s_lo);
-        _mm_storeu_si128(split.as_mut_ptr().add(4).cast(), s_hi);
+        // Lane `i - 1` to index `i`, straight into the rows (the splits
+        // narrowed to bytes by two saturating packs, exact for 1..=7): a
+        // loop copying them cost about 30 instructions per interior node.
+        let mut d = [f32::INFINITY; WIDTH + 1];
+        let mut s = [0u8; WIDTH + 1];
+        _mm_storeu_ps(d.as_mut_ptr().add(1), d_lo);
+        _mm_storeu_ps(d.as_mut_ptr().add(5), d_hi);
+        let bytes = _mm_packus_epi16(_mm_packs_epi32(s_lo, s_hi), _mm_setzero_si128());
+        _mm_storel_epi64(s.as_mut_ptr().add(1).cast(), bytes);
+        (d, s)
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
+        let mut dist = [0.0f32; WIDTH];
+        let mut split = [1u32; WIDTH];
         for (i, d) in dist.iter_mut().enumerate() {
             *d = cl[1] + shifted[WIDTH + i];
         }
@@ -220,14 +227,14 @@ fn both_children(cl: &Row, cr: &Row) -> (Row, [u8; WIDTH + 1]) {
                 split[i] = if take { j as u32 } else { split[i] };
             }
         }
+        let mut d = [f32::INFINITY; WIDTH + 1];
+        let mut s = [0u8; WIDTH + 1];
+        for i in 2..=WIDTH {
+            d[i] = dist[i - 1];
+            s[i] = split[i - 1] as u8;
+        }
+        (d, s)
     }
-    let mut d = [f32::INFINITY; WIDTH + 1];
-    let mut s = [0u8; WIDTH + 1];
-    for i in 2..=WIDTH {
-        d[i] = dist[i - 1];
-        s[i] = split[i - 1] as u8;
-    }
-    (d, s)
 }
 
 impl<'a> Plan<'a> {
