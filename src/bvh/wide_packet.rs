@@ -856,10 +856,11 @@ fn shear8(soa: &Soa) -> Sheared {
     let dz = _mm256_blendv_ps(_mm256_blendv_ps(d[0], d[1], z1), d[2], z2);
     // kx = kz + 1 and ky = kz + 2 (mod 3), swapped where dir[kz] < 0.
     let neg = _mm256_cmp_ps::<_CMP_LT_OQ>(dz, _mm256_setzero_ps());
-    // `spread_scale`, same operations: `|o|_inf |1 / dz|`.
+    // `sz`, and `spread_scale` with the same operations: `|o|_inf |sz|`.
+    let sz = _mm256_div_ps(_mm256_set1_ps(1.0), dz);
     let abs_o = o.map(|x| _mm256_andnot_ps(sign, x));
     let o_inf = _mm256_max_ps(_mm256_max_ps(abs_o[0], abs_o[1]), abs_o[2]);
-    let spread = _mm256_mul_ps(o_inf, _mm256_andnot_ps(sign, _mm256_div_ps(_mm256_set1_ps(1.0), dz)));
+    let spread = _mm256_mul_ps(o_inf, _mm256_andnot_ps(sign, sz));
     let uniform = |m: __m256| matches!(_mm256_movemask_ps(m), 0 | 0xff);
     if uniform(z0) && uniform(z1) && uniform(neg) {
         let kz = if _mm256_movemask_ps(z0) != 0 {
@@ -873,7 +874,7 @@ fn shear8(soa: &Soa) -> Sheared {
         if _mm256_movemask_ps(neg) != 0 {
             std::mem::swap(&mut kx, &mut ky);
         }
-        let s = [_mm256_div_ps(d[kx], dz), _mm256_div_ps(d[ky], dz), _mm256_div_ps(_mm256_set1_ps(1.0), dz)];
+        let s = [_mm256_div_ps(d[kx], dz), _mm256_div_ps(d[ky], dz), sz];
         return Sheared { k: [kx, ky, kz], mixed: None, o: [o[kx], o[ky], o[kz]], s, t_min, spread };
     }
     // Per lane: axis kx is y where kz = 0 (z where kz = 1), axis ky is z where
@@ -886,7 +887,7 @@ fn shear8(soa: &Soa) -> Sheared {
     ];
     let pick = |v: &[__m256; 3], m: &[__m256; 2]| _mm256_blendv_ps(_mm256_blendv_ps(v[0], v[1], m[0]), v[2], m[1]);
     let (dx, dy) = (pick(&d, &sel[0]), pick(&d, &sel[1]));
-    let s = [_mm256_div_ps(dx, dz), _mm256_div_ps(dy, dz), _mm256_div_ps(_mm256_set1_ps(1.0), dz)];
+    let s = [_mm256_div_ps(dx, dz), _mm256_div_ps(dy, dz), sz];
     let o = [pick(&o, &sel[0]), pick(&o, &sel[1]), pick(&o, &sel[2])];
     Sheared { k: [0, 1, 2], mixed: Some(sel), o, s, t_min, spread }
 }
