@@ -22,11 +22,11 @@ use rtdiff::backends::{AccelConfig, build_tracer};
 use rtdiff::geometry::triangle::{
     E_FLOOR, SIGN_MARGIN, WatertightRay, spread_scale, watertight_e_error, watertight_t_error, watertight_t_imprecise,
 };
-use rtdiff::geometry::{Primitives, Ray};
+use rtdiff::geometry::{Hit, Primitives, Ray};
 use rtdiff::perf::bench::RaySets;
 use rtdiff::rays::sets::{SetKind, generate};
-use rtdiff::verify::hits::K_ROUNDING;
 use rtdiff::verify::hits::arbiter::Arbiter;
+use rtdiff::verify::hits::bounds;
 
 const U: f32 = f32::EPSILON * 0.5;
 
@@ -90,17 +90,6 @@ fn sample(ray: &Ray, v: [Vec3; 3]) -> Option<Sample> {
         now: watertight_t_imprecise(de, [a.z, b.z, c.z], t, det, ro),
         grad: de * spread / (32.0 / 3f32.sqrt() * U * ro.max(t) * slope.max(det.abs())),
     })
-}
-
-/// The parity bound on `t` (unit-free copy of `verify::hits::bounds`).
-fn t_bound(ray: &Ray, t: f32, v: [Vec3; 3]) -> f64 {
-    let [p0, p1, p2] = v.map(|p| p.as_dvec3());
-    let n = (p1 - p0).cross(p2 - p0).normalize_or_zero();
-    let d = ray.dir.as_dvec3();
-    let c = (d.dot(n) / d.length()).abs().max(1e-300);
-    let p = ray.at(t).as_dvec3();
-    let mag = ray.origin.as_dvec3().abs().max_element() + p.abs().max_element();
-    K_ROUNDING * (U as f64) * mag / c / d.length()
 }
 
 /// A fallback rule: a name and whether it sends a sample to double precision.
@@ -173,7 +162,7 @@ fn main() -> rtdiff::Result<()> {
                 n += 1;
                 let exact = arb.evaluate(r, h.prim);
                 let abs_err = (s.t as f64 - exact.t_f64).abs();
-                let err = abs_err / t_bound(r, s.t, tri.v);
+                let err = abs_err / bounds::of_hit(&p, r, &Hit { t: s.t, ..h }).0;
                 if s.old > 64.0 {
                     err_per_term = err_per_term.max(abs_err / (s.old as f64 * (U as f64) * s.t as f64));
                 }

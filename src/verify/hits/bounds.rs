@@ -77,6 +77,13 @@ pub(crate) fn bounds(ray: &Ray, h: &Hit, g: &HitGeom) -> (f64, f64) {
     (t_bound, b_bound)
 }
 
+/// The bounds `(t, barycentrics)` of the module documentation for hit `h` of
+/// `ray` on `prims`: how far a correct single-precision tracer's distance and
+/// barycentrics may lie from the exact ones.
+pub fn of_hit(prims: &Primitives, ray: &Ray, h: &Hit) -> (f64, f64) {
+    bounds(ray, h, &hit_geom(prims, ray, h))
+}
+
 /// True when the watertight test may refuse reference hit `h` by design: it
 /// rejects a computed distance below its own error bound `delta`
 /// (pbrt-v4's test that keeps spawned rays off their surface), so a true

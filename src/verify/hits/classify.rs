@@ -26,7 +26,7 @@ pub fn is_leak(ray: &Ray, tag: RayTag, h: &Option<Hit>, prims: &Primitives) -> b
         None => true,
         Some(h) => {
             // A hit beyond the crossing point (by more than rounding) went through.
-            let (tb, _) = bounds(ray, h, &hit_geom(prims, ray, h));
+            let (tb, _) = super::bounds::of_hit(prims, ray, h);
             (h.t as f64) > t as f64 + tb
         }
     }

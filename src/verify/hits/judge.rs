@@ -228,8 +228,7 @@ fn beyond_bound(
         return None;
     }
     let ray = &set.rays[i];
-    let g = super::bounds::hit_geom(&set.prims, ray, r);
-    let (tb, bb) = super::bounds::bounds(ray, r, &g);
+    let (tb, bb) = super::bounds::of_hit(&set.prims, ray, r);
     let what = if (h.t as f64 - r.t as f64).abs() > tb {
         format!("t {} on primitive {}, reference t {} (bound {:.3e})", h.t, h.prim, r.t, tb)
     } else {
