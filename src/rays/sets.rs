@@ -414,6 +414,23 @@ mod tests {
         assert_eq!(t.closed_vertices.len(), 4);
     }
 
+    /// A triangle and its reversed copy share all three edges, each one
+    /// pair of triangles: the edges still come in one order, whatever order
+    /// the hash map of each construction lists them in (before, sorted by the
+    /// triangle pair alone, the edge set's rays changed from run to run on
+    /// meshes with such pairs).
+    #[test]
+    fn shared_edges_come_in_one_order() {
+        let tri = |a: Vec3, b: Vec3, c: Vec3| crate::geometry::Triangle { v: [a, b, c] };
+        let (p, q, r) = (Vec3::ZERO, Vec3::X, Vec3::Y);
+        let prims = Primitives { triangles: vec![tri(p, q, r), tri(p, r, q)], spheres: Vec::new() };
+        let first = Topology::new(&prims).shared_edges;
+        assert_eq!(first.len(), 3);
+        for _ in 0..32 {
+            assert_eq!(Topology::new(&prims).shared_edges, first);
+        }
+    }
+
     #[test]
     fn every_set_is_deterministic_and_sized() {
         let prims = tetra();

@@ -57,14 +57,18 @@ impl Topology {
                 fans[a as usize].push(i as u32);
             }
         }
-        let mut shared_edges: Vec<_> = edges
+        let mut shared: Vec<_> = edges
             .iter()
             // Two triangles, opposite directions: a manifold, consistently wound edge.
             .filter(|(_, v)| v.len() == 2 && v[0].1 != v[1].1)
-            .map(|(&(a, b), v)| (pos[a as usize], pos[b as usize], v[0].0, v[1].0))
+            .map(|(&(a, b), v)| (v[0].0, v[1].0, a, b))
             .collect();
-        // HashMap order is random: sort for determinism.
-        shared_edges.sort_by_key(|e| (e.2, e.3));
+        // HashMap order is random: sort for determinism, by the triangle pair
+        // and then by the edge's vertices (two triangles may share more than
+        // one edge: a triangle and its reversed copy share all three).
+        shared.sort_unstable();
+        let shared_edges =
+            shared.into_iter().map(|(t0, t1, a, b)| (pos[a as usize], pos[b as usize], t0, t1)).collect();
         let mut closed_vertices = Vec::new();
         for (vi, fan) in fans.into_iter().enumerate() {
             if fan.len() < 3 {
