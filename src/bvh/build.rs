@@ -200,7 +200,7 @@ pub fn prim_refs_and_bounds(prims: &Primitives) -> (Vec<PrimRef>, BoxA, BoxA) {
         (b, cb)
     };
     let n = prims.len();
-    let mut refs = Vec::with_capacity(n);
+    let mut refs = super::scratch::refs(n);
     let room = &mut refs.spare_capacity_mut()[..n];
     let (b, cb) = if parallel_pass(n) {
         room.par_chunks_mut(PARALLEL_PASS)
@@ -403,6 +403,13 @@ impl<V> GappedTree<V> {
         Self { nodes, values, count, end: count, order }
     }
 
+    /// Give the node slots and the leaf order back to the thread's build
+    /// scratch ([`super::scratch`]) once the tree has been read.
+    pub fn recycle(self) {
+        super::scratch::give_nodes(self.nodes);
+        super::scratch::give_order(self.order);
+    }
+
     /// The tree in the sequential depth-first layout, without the values.
     pub fn into_built(self) -> BuiltTree {
         let order = self.order;
@@ -486,7 +493,7 @@ fn build_slots<S: Summary>(
     let (mut refs, bounds, centroids) = prim_refs_and_bounds(prims);
     let n = refs.len();
     let slots = (2 * n).saturating_sub(1);
-    let mut nodes: Vec<MaybeUninit<Node>> = Vec::with_capacity(slots);
+    let mut nodes: Vec<MaybeUninit<Node>> = super::scratch::nodes(slots);
     let mut values: Vec<MaybeUninit<S::Value>> = Vec::with_capacity(slots);
     // SAFETY: uninitialised `MaybeUninit`s are valid values.
     unsafe {
@@ -500,11 +507,13 @@ fn build_slots<S: Summary>(
         let root = build_node(&c, &mut refs, bounds.aabb(), Some(centroids), 0, 0, 0);
         (count, end) = (root.count, root.end);
     }
-    let order = if parallel_pass(n) {
-        refs.par_iter().with_min_len(PARALLEL_PASS).map(PrimRef::id).collect()
+    let mut order = super::scratch::order(n);
+    if parallel_pass(n) {
+        refs.par_iter().with_min_len(PARALLEL_PASS).map(PrimRef::id).collect_into_vec(&mut order);
     } else {
-        refs.iter().map(PrimRef::id).collect()
-    };
+        order.extend(refs.iter().map(PrimRef::id));
+    }
+    super::scratch::give_refs(refs);
     GappedTree { nodes, values, count, end, order }
 }
 

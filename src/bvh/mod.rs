@@ -23,6 +23,7 @@ pub mod huge;
 pub mod node;
 pub mod packet;
 pub mod prims;
+pub mod scratch;
 pub mod slab;
 pub mod stats;
 pub mod traverse_basic;
@@ -65,7 +66,10 @@ fn splitter(cfg: &BvhConfig, prims: usize) -> Box<dyn build::Splitter> {
 /// `fast` traversal, gathering the leaves' triangles straight into packets.
 pub fn build_wide(prims: &Primitives, cfg: impl Into<BvhConfig>) -> WideBvh {
     let table = collapse::CostTable { block: packet::leaf_block(prims.len()) };
-    WideBvh::from_tree(prims, &build::build_gapped(prims, splitter(&cfg.into(), prims.len()).as_ref(), &table))
+    let tree = build::build_gapped(prims, splitter(&cfg.into(), prims.len()).as_ref(), &table);
+    let wide = WideBvh::from_tree(prims, &tree);
+    tree.recycle();
+    wide
 }
 
 /// Build the binary BVH `cfg` asks for and its 8-wide collapse, and gather
