@@ -12,6 +12,17 @@
 //! buffer of its own per thread instead, kept when it holds at most
 //! [`KEEP_BYTES`] (meshes of up to about 16,000 triangles), freed otherwise.
 //! At most three such buffers live per thread that built a tree.
+//!
+//! Larger temporaries are not kept; they are asked for on huge pages
+//! ([`super::huge`], as the tree's own arrays), whose fresh pages fault in
+//! 2 MiB at a time wherever the allocator found the memory. Before, a large
+//! build's time followed the process's history as well: dragon_full's
+//! one-thread build took 119 ms in a fresh outside loop and 128 ms after
+//! suzanne's and dragon_87k's builds in the same process (137.7 ms when every
+//! block came fresh from the system, `MALLOC_MMAP_THRESHOLD_=131072`); with
+//! huge pages 113 ms (122 ms fresh), and the race level (dragon_full
+//! 1.99-2.05 -> 2.04, dragon_87k 2.14-2.22 -> 2.21-2.24 against robust
+//! MEDIUM, two alternated pairs of `--race 3`).
 
 use std::cell::Cell;
 use std::mem::MaybeUninit;
@@ -30,8 +41,12 @@ thread_local! {
 }
 
 /// An empty vector with room for `n` elements: the thread's kept buffer when
-/// there is one (grown if needed), a new one otherwise.
+/// there is one (grown if needed), a new one otherwise (on huge pages when
+/// it is too large to keep).
 fn take<T>(key: &'static LocalKey<Cell<Vec<T>>>, n: usize) -> Vec<T> {
+    if n * std::mem::size_of::<T>() > KEEP_BYTES {
+        return super::huge::vec_with_capacity(n);
+    }
     let mut v = key.take();
     v.clear();
     v.reserve_exact(n);
