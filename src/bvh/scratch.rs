@@ -14,8 +14,9 @@
 //! At most three such buffers live per thread that built a tree.
 //!
 //! Larger temporaries are not kept; they are asked for on huge pages
-//! ([`super::huge`], as the tree's own arrays), whose fresh pages fault in
-//! 2 MiB at a time wherever the allocator found the memory. Before, a large
+//! ([`super::huge`], as the tree's own arrays, which leaves arrays under
+//! 4 MiB alone), whose fresh pages fault in 2 MiB at a time wherever the
+//! allocator found the memory. Before, a large
 //! build's time followed the process's history as well: dragon_full's
 //! one-thread build took 119 ms in a fresh outside loop and 128 ms after
 //! suzanne's and dragon_87k's builds in the same process (137.7 ms when every
