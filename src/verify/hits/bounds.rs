@@ -141,7 +141,7 @@ mod tests {
         let (mut hits, mut beyond) = (0, Vec::new());
         let mut check = |ray: &Ray, h: Hit, how: &str| {
             let exact = arbiter.evaluate(ray, h.prim);
-            let (tb, bb) = bounds(ray, &h, &hit_geom(&prims, ray, &h));
+            let (tb, bb) = of_hit(&prims, ray, &h);
             let dt = (h.t as f64 - exact.t_f64).abs();
             let db = (h.u as f64 - exact.bary[1]).abs().max((h.v as f64 - exact.bary[2]).abs());
             hits += 1;
