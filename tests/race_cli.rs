@@ -6,7 +6,8 @@ use std::process::Command;
 
 use rtdiff::bvh::WalkIsa;
 
-/// Race one round on a cube of twelve triangles; returns stdout and the JSON report.
+/// Race one round on a cube of twelve triangles (on one thread unless
+/// `extra` says otherwise); returns stdout and the JSON report.
 fn race(dir: &std::path::Path, extra: &[&str]) -> (String, serde_json::Value) {
     let mesh = dir.join("cube.obj");
     let mut obj = String::new();
@@ -21,7 +22,10 @@ fn race(dir: &std::path::Path, extra: &[&str]) -> (String, serde_json::Value) {
     }
     std::fs::write(&mesh, obj).unwrap();
     let json = dir.join("race.json");
-    let mut args = vec!["bench", "--race", "1", "--threads", "1", "--json", json.to_str().unwrap()];
+    let mut args = vec!["bench", "--race", "1", "--json", json.to_str().unwrap()];
+    if !extra.contains(&"--threads") {
+        args.extend_from_slice(&["--threads", "1"]);
+    }
     args.extend_from_slice(extra);
     args.push(mesh.to_str().unwrap());
     let out = Command::new(env!("CARGO_BIN_EXE_rtdiff")).args(&args).output().expect("runs");
@@ -86,5 +90,26 @@ fn builds_repeat_within_a_round() {
         assert_eq!(c["times"].as_array().unwrap().len(), 2, "{}", c["opponent"]);
         assert_eq!(c["walls"].as_array().unwrap().len(), 2, "{}", c["opponent"]);
     }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// With a two-thread pool raced, the race first measures how long the
+/// host takes to start an idle pool thread (`perf::wake`) and prints it, in
+/// the text and in the JSON, beside the build scaling; with one thread only
+/// it measures nothing.
+#[test]
+fn two_threads_report_the_hosts_idle_wake() {
+    let dir = std::env::temp_dir().join(format!("rtdiff-race-wake-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (text, report) = race(&dir, &["--threads", "1,2"]);
+    assert!(text.contains("host: an idle thread of a 2-thread pool started work"), "{text}");
+    assert!(text.contains("an idle thread of the host's 2-thread pool started work after"), "{text}");
+    let wakes = report["idle_wake"].as_array().unwrap();
+    assert_eq!(wakes.len(), 1);
+    assert_eq!(wakes[0]["threads"], 2);
+    assert_eq!(wakes[0]["delays_ms"].as_array().unwrap().len(), 5);
+    let (text, report) = race(&dir, &[]);
+    assert!(!text.contains("host: an idle thread"), "{text}");
+    assert!(report["idle_wake"].as_array().unwrap().is_empty());
     std::fs::remove_dir_all(&dir).ok();
 }
