@@ -1,6 +1,8 @@
 //! The reports' recursive (Whitted-style) ray tracer: direct light with hard
 //! and soft shadows, mirror and glossy reflection, alpha-blended transparency.
 
+use std::mem::MaybeUninit;
+
 use glam::{Vec2, Vec3};
 
 use super::debug::{NoRecorder, RayKind, Recorder};
@@ -13,7 +15,7 @@ use crate::light::LightSample;
 use crate::material::Material;
 use crate::rng::Pcg32;
 use crate::scene::Scene;
-use crate::shading::{SurfacePoint, model};
+use crate::shading::{ShadingModel, SurfacePoint, model};
 
 /// Shadow rays stop this fraction of the way short of the light sample, so a
 /// light lying exactly on a surface (a light quad modelled as geometry too) is
@@ -164,8 +166,29 @@ impl<'a> Whitted<'a> {
     /// to the tracer as one batch of any-hit queries; with transparency on,
     /// only the occluded ones walk on through transparent blockers (an
     /// unoccluded ray transmits everything, as the walk would find).
-    fn flush_shadows(&self, it: &Interaction, batch: &mut ShadowBatch, c: &mut Counters, sum: &mut Vec3) {
-        let n = batch.len;
+    fn flush_shadows(
+        &self,
+        it: &Interaction,
+        (shading, sp): (&dyn ShadingModel, &SurfacePoint),
+        batch: &mut ShadowBatch,
+        c: &mut Counters,
+        sum: &mut Vec3,
+    ) {
+        // The pending samples of an area light shaded in one loop of
+        // independent work (their square roots and divisions overlap, where
+        // shaded one by one between the light's sampling they did not); only
+        // those that reflect something get a shadow ray.
+        let mut n = batch.len;
+        for k in 0..batch.pending {
+            // SAFETY: the first `pending` samples were written.
+            let s = unsafe { batch.samples[k].assume_init_ref() };
+            let f = shading.direct(sp, s);
+            if f != Vec3::ZERO {
+                (batch.targets[n], batch.f[n]) = (s.position, f);
+                n += 1;
+            }
+        }
+        (batch.len, batch.pending) = (0, 0);
         if n == 0 {
             return;
         }
@@ -188,7 +211,6 @@ impl<'a> Whitted<'a> {
             };
             *sum += vis * batch.f[k];
         }
-        batch.len = 0;
     }
 
     /// Light reflected at `it` towards `wo` from every light, `kd` being the diffuse colour there.
@@ -210,6 +232,16 @@ impl<'a> Whitted<'a> {
             // together, their contributions added in sample order.
             light.sample(n, sampling, rng, &mut |s: LightSample| {
                 c.light_samples += 1;
+                let batched = shadows && !R::ACTIVE;
+                if batched && batch.len + batch.pending == SHADOW_BATCH {
+                    self.flush_shadows(it, (shading, &sp), &mut batch, c, &mut sum);
+                }
+                if batched && !point {
+                    // Shaded with the batch (`flush_shadows`).
+                    batch.samples[batch.pending] = MaybeUninit::new(s);
+                    batch.pending += 1;
+                    return;
+                }
                 let f = shading.direct(&sp, &s);
                 if f == Vec3::ZERO {
                     rec.light_sample(li, &s, f, 0.0);
@@ -221,14 +253,11 @@ impl<'a> Whitted<'a> {
                     sum += vis * f;
                     rec.light_sample(li, &s, f, vis);
                 } else {
-                    if batch.len == SHADOW_BATCH {
-                        self.flush_shadows(it, &mut batch, c, &mut sum);
-                    }
                     (batch.targets[batch.len], batch.f[batch.len]) = (s.position, f);
                     batch.len += 1;
                 }
             });
-            self.flush_shadows(it, &mut batch, path.c, &mut sum);
+            self.flush_shadows(it, (shading, &sp), &mut batch, path.c, &mut sum);
         }
         sum
     }
@@ -319,7 +348,13 @@ const SHADOW_BATCH: usize = 16;
 /// The pending shadow rays of one shading point: targets, unshadowed
 /// contributions, and room for the rays and answers.
 struct ShadowBatch {
+    /// Shaded entries waiting for their shadow rays (`targets`, `f`).
     len: usize,
+    /// Area-light samples waiting to be shaded (`samples`), shaded before
+    /// the entries' rays are traced.
+    pending: usize,
+    /// The pending light samples (the first `len` written).
+    samples: [MaybeUninit<LightSample>; SHADOW_BATCH],
     targets: [Vec3; SHADOW_BATCH],
     f: [Vec3; SHADOW_BATCH],
     rays: [Ray; SHADOW_BATCH],
@@ -330,6 +365,8 @@ impl Default for ShadowBatch {
     fn default() -> Self {
         Self {
             len: 0,
+            pending: 0,
+            samples: [MaybeUninit::uninit(); SHADOW_BATCH],
             targets: [Vec3::ZERO; SHADOW_BATCH],
             f: [Vec3::ZERO; SHADOW_BATCH],
             rays: [Ray::new(Vec3::ZERO, Vec3::Z); SHADOW_BATCH],

@@ -44,12 +44,17 @@ impl Light for ParallelogramLight {
     fn sample(&self, n: u32, sampling: LightSampling, rng: &mut Pcg32, f: &mut dyn FnMut(LightSample)) {
         let n = n.max(1);
         let normal = Some(self.normal());
-        let mut push = |a: f32, b: f32, count: u32| {
+        // The samples' count, weight and measure, made once per call (the
+        // area's square root and the two divisions were made per sample).
+        let k = (n as f32).sqrt().ceil() as u32;
+        let count = if sampling == LightSampling::Jittered { k * k } else { n };
+        let (average_weight, measure) = (1.0 / count as f32, self.area() / count as f32);
+        let mut push = |a: f32, b: f32| {
             f(LightSample {
                 position: self.position_at(a, b),
                 color: self.color_at(a, b),
-                average_weight: 1.0 / count as f32,
-                measure: self.area() / count as f32,
+                average_weight,
+                measure,
                 normal,
             })
         };
@@ -57,16 +62,15 @@ impl Light for ParallelogramLight {
             LightSampling::Random => {
                 for _ in 0..n {
                     let (a, b) = (rng.next_f32(), rng.next_f32());
-                    push(a, b, n);
+                    push(a, b);
                 }
             }
             LightSampling::Jittered => {
-                let k = (n as f32).sqrt().ceil() as u32;
                 for i in 0..k {
                     for j in 0..k {
                         let a = (i as f32 + rng.next_f32()) / k as f32;
                         let b = (j as f32 + rng.next_f32()) / k as f32;
-                        push(a, b, k * k);
+                        push(a, b);
                     }
                 }
             }
