@@ -209,8 +209,6 @@ fn race(args: &BenchArgs, rounds: usize) -> Result<()> {
                 wakes.push(w);
             }
         }
-    }
-    if !args.renders_only {
         let files = if args.scenes.is_empty() {
             default_meshes(&["suzanne", "dragon_87k", "dragon_full"])
         } else {
