@@ -6,6 +6,13 @@ use std::process::Command;
 
 use rtdiff::bvh::WalkIsa;
 
+/// A fresh folder for one test's files (removed by the test when it passes).
+fn scratch(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
 /// Race one round on a cube of twelve triangles (on one thread unless
 /// `extra` says otherwise); returns stdout and the JSON report.
 fn race(dir: &std::path::Path, extra: &[&str]) -> (String, serde_json::Value) {
@@ -37,8 +44,7 @@ fn race(dir: &std::path::Path, extra: &[&str]) -> (String, serde_json::Value) {
 
 #[test]
 fn the_race_runs_and_reports_the_walks_instruction_set() {
-    let dir = std::env::temp_dir().join(format!("rtdiff-race-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("rtdiff-race-cli");
     let widest = WalkIsa::supported()[0];
     for (extra, isa, note) in
         [(vec![], widest, ""), (vec!["--rtdiff-isa", "portable"], WalkIsa::Portable, " (set by --rtdiff-isa)")]
@@ -78,8 +84,7 @@ fn the_race_runs_and_reports_the_walks_instruction_set() {
 /// a sample of the build contests, and says so in the mesh's heading.
 #[test]
 fn builds_repeat_within_a_round() {
-    let dir = std::env::temp_dir().join(format!("rtdiff-race-repeats-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("rtdiff-race-repeats");
     let (text, report) = race(&dir, &["--build-repeats", "2"]);
     assert!(text.contains("1 interleaved rounds (2 builds of each per round)"), "{text}");
     let mesh = &report["meshes"][0];
@@ -99,8 +104,7 @@ fn builds_repeat_within_a_round() {
 /// it measures nothing.
 #[test]
 fn two_threads_report_the_hosts_idle_wake() {
-    let dir = std::env::temp_dir().join(format!("rtdiff-race-wake-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("rtdiff-race-wake");
     let (text, report) = race(&dir, &["--threads", "1,2"]);
     assert!(text.contains("host: an idle thread of a 2-thread pool started work"), "{text}");
     assert!(text.contains("an idle thread of the host's 2-thread pool started work after"), "{text}");
