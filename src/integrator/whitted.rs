@@ -162,7 +162,8 @@ impl<'a> Whitted<'a> {
     }
 
     /// [`Self::visibility`] of every pending sample of `batch` from `it`,
-    /// added to `sum` in sample order as `visibility * f`: the shadow rays go
+    /// added to `sum` in sample order as `visibility * f` (an area light's
+    /// samples first shaded with `shading` at `sp`): the shadow rays go
     /// to the tracer as one batch of any-hit queries; with transparency on,
     /// only the occluded ones walk on through transparent blockers (an
     /// unoccluded ray transmits everything, as the walk would find).
@@ -178,6 +179,9 @@ impl<'a> Whitted<'a> {
         // independent work (their square roots and divisions overlap, where
         // shaded one by one between the light's sampling they did not); only
         // those that reflect something get a shadow ray.
+        // One light's samples at a time: shaded entries (a point light's) or
+        // pending samples (an area light's), never both.
+        debug_assert!(batch.len == 0 || batch.pending == 0, "two lights' samples in one batch");
         let mut n = batch.len;
         for k in 0..batch.pending {
             // SAFETY: the first `pending` samples were written.
@@ -227,9 +231,11 @@ impl<'a> Whitted<'a> {
             let shadows = if point { self.plan.hard_shadows } else { self.plan.soft_shadows };
             let (n, sampling) = (self.scene.params.light_samples, self.scene.params.light_sampling);
             let Path { rng, c, rec } = path;
-            // Shade each sample as the light produces it (no list, no
-            // allocation); shadow rays wait in `batch` and go to the tracer
-            // together, their contributions added in sample order.
+            // No list, no allocation: a point light's sample is shaded as
+            // the light produces it, an area light's samples wait in `batch`
+            // and are shaded there; shadow rays go to the tracer together,
+            // their contributions added in sample order. One light's samples
+            // are flushed before the next light's.
             light.sample(n, sampling, rng, &mut |s: LightSample| {
                 c.light_samples += 1;
                 let batched = shadows && !R::ACTIVE;
@@ -353,7 +359,7 @@ struct ShadowBatch {
     /// Area-light samples waiting to be shaded (`samples`), shaded before
     /// the entries' rays are traced.
     pending: usize,
-    /// The pending light samples (the first `len` written).
+    /// The pending light samples (the first `pending` written).
     samples: [MaybeUninit<LightSample>; SHADOW_BATCH],
     targets: [Vec3; SHADOW_BATCH],
     f: [Vec3; SHADOW_BATCH],
