@@ -938,8 +938,12 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool>(
     let fr = unsafe { frustum(&soa, v.rows) };
     let cull_hi = horizontal!(_mm256_max_ps, cull);
     let mut wr: [Option<LeafRay>; PACKET] = [None; PACKET];
-    // Made at the first leaf that enough rays reach, with the rays' t_max.
-    let mut sheared: Option<(Sheared, __m256)> = None;
+    // The rows of the one-triangle tests, with the rays' t_max, made here:
+    // shadow rays nearly all reach a leaf, and made at the first leaf their
+    // test waited for the shear and a branch guessed wrong once per packet.
+    let t_max: [f32; PACKET] = std::array::from_fn(|i| rays[i.min(n - 1)].t_max);
+    // SAFETY: t_max holds 8 floats; loadu has no alignment requirement.
+    let (sh, t_max) = (rays8::<K>(&soa), unsafe { _mm256_loadu_ps(t_max.as_ptr()) });
     // Rays still looking for an occluder.
     let mut open = if n == PACKET { 0xff } else { (1u32 << n) - 1 };
     let all = open;
@@ -1025,11 +1029,6 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool>(
                 && m.count_ones() >= SOA_LEAF_RAYS_ANY.max(c.div_ceil(2))
                 && let Some(pk) = &bvh.packets
             {
-                let (sh, t_max) = sheared.get_or_insert_with(|| {
-                    let t_max: [f32; PACKET] = std::array::from_fn(|i| rays[i.min(n - 1)].t_max);
-                    // SAFETY: t_max holds 8 floats; loadu has no alignment requirement.
-                    (rays8::<K>(&soa), unsafe { _mm256_loadu_ps(t_max.as_ptr()) })
-                });
                 // One triangle against all the leaf's rays at once; a ray
                 // leaves the leaf at its first occluder (any occluder will do:
                 // the answer is a yes or no).
@@ -1037,7 +1036,7 @@ pub(super) unsafe fn any8<K: TriangleKernel, const S: usize, const P: bool>(
                     let p = &pk.packets[node.child[l] as usize + k / super::packet::PW];
                     let pl = k % super::packet::PW;
                     // SAFETY: any8 runs on AVX2 CPUs only.
-                    let (ok, unc, _, _, _) = unsafe { tri_x8_k::<K>(sh, p, pl, *t_max) };
+                    let (ok, unc, _, _, _) = unsafe { tri_x8_k::<K>(&sh, p, pl, t_max) };
                     let (mut hit, mut unc) = (ok & m, unc & m);
                     while unc != 0 {
                         let i = unc.trailing_zeros() as usize;
