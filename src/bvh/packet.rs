@@ -298,7 +298,15 @@ impl TriPackets {
         if matches!(pks.len(), 1 | 2) {
             return occluded_pair(&pks[0], pks.get(1), ray, lr);
         }
-        pks.chunks(2).any(|pq| occluded_pair(&pq[0], pq.get(1), ray, lr))
+        // (A loop, not `Iterator::any`: the closure of `any` was compiled
+        // apart from the AVX2 walk, and the eight-lane test in it with calls
+        // for its intrinsics.)
+        for pq in pks.chunks(2) {
+            if occluded_pair(&pq[0], pq.get(1), ray, lr) {
+                return true;
+            }
+        }
+        false
     }
 
     /// SIMD Moller-Trumbore closest-hit test of a leaf of packets `pks`; same results as
@@ -486,11 +494,20 @@ fn tri4_sse(
 /// lane is the scalar routine's answer bit for bit). A leaf of five to eight
 /// triangles takes one such test instead of two four-lane ones.
 ///
+/// Expanded into its callers, as [`tri4_sse`] (a function compiled for AVX2
+/// of its own may not be, and the walks called it: the call, its arguments
+/// and results through memory, and every per-ray constant reloaded after
+/// it). `rtdiff bench --race 3 --threads 1 --rtdiff-isa avx2
+/// --embree-max-isa avx2`, alternated binaries (two pairs), dragon_87k
+/// (leaves of up to eight triangles) against Embree's default mode:
+/// incoherent 0.918 / 0.915 -> 0.934 / 0.932, camera 1.020 / 1.040 -> 1.066
+/// / 1.055; suzanne (`--race 5`) incoherent 0.918 / 0.920 -> 0.927 / 0.929.
+///
 /// # Safety
-/// The CPU must have AVX2 (it runs inside the AVX2 walks only).
+/// The CPU must have AVX2 (it runs inside the AVX2 walks only, whose
+/// instruction set its intrinsics then take).
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-#[inline]
+#[inline(always)]
 unsafe fn tri8_avx(
     p: &Tri4,
     q: &Tri4,
