@@ -1380,7 +1380,8 @@ impl WideBvh {
     /// or two): each address picked by value, an entered inner node's or
     /// packet leaf's, or for a lane not entered the node itself (already in
     /// the cache), and six lines from each (a node's four and the first two of
-    /// the node after it; a leaf's one or two packets). Only a third entered
+    /// the node after it; a leaf's one or two packets; a sphere leaf's lane
+    /// gets an address of no use, which a prefetch may take). Only a third entered
     /// lane takes the loop of [`Self::prefetch_children`], whose trip count
     /// and inner-or-leaf test were branches that callgrind's model of the
     /// predictor missed 3.7 times per dragon_87k incoherent ray (of 9.4).
