@@ -13,7 +13,14 @@
 //! three radii from the centre), `--rtdiff-isa
 //! avx2|avx512` and `--embree-max-isa avx2|avx512` (cap each library's
 //! instruction set, as on a CPU without AVX-512), `--clock wall|cpu` (default
-//! wall: `Instant`; cpu: the thread's CPU time, for a loaded host).
+//! wall: `Instant`; cpu: the thread's CPU time, for a loaded host),
+//! `--split` (each ray set also as two cells, `SET-hits` and `SET-misses`,
+//! by Embree default's answer: which rays a difference comes from),
+//! `--triangle-test watertight|moller-trumbore` (rtdiff's triangle test,
+//! default watertight: what the watertight test costs against Embree's
+//! default mode, which is not watertight), `--only SET:WHO` (trace one
+//! cell, `camera`, `incoherent-hits`, ..., `--runs` times by `rtdiff`,
+//! `embree-default` or `embree-robust`, untimed: for profilers).
 //!
 //! Nothing here comes from the race (`rtdiff bench --race`): the mesh is
 //! loaded as a user loads it (no normalisation), framed by its own camera
@@ -95,8 +102,12 @@ struct Options {
     rtdiff_isa: Option<rtdiff::bvh::WalkIsa>,
     embree_max_isa: Option<String>,
     cpu_clock: bool,
-    /// `--only SET:WHO`: trace one set once by one contestant and stop (for profilers).
+    /// `--only SET:WHO`: trace one set `runs` times by one contestant, untimed (for profilers).
     only: Option<(String, usize)>,
+    /// `--split`: each set also as its hits and its misses (by Embree default's answer).
+    split: bool,
+    /// `--triangle-test`: rtdiff's triangle test (its default: watertight).
+    triangle_test: rtdiff::geometry::TriangleTest,
     meshes: Vec<String>,
 }
 
@@ -118,6 +129,8 @@ fn parse_args() -> rtdiff::Result<Options> {
         embree_max_isa: None,
         cpu_clock: false,
         only: None,
+        split: false,
+        triangle_test: rtdiff::geometry::TriangleTest::default(),
         meshes: Vec::new(),
     };
     let bad = |m: String| rtdiff::Error::Invalid(m);
@@ -153,6 +166,14 @@ fn parse_args() -> rtdiff::Result<Options> {
                     "wall" => false,
                     "cpu" => true,
                     v => return Err(bad(format!("--clock {v}: expected wall or cpu"))),
+                }
+            }
+            "--split" => o.split = true,
+            "--triangle-test" => {
+                o.triangle_test = match value()?.as_str() {
+                    "watertight" => rtdiff::geometry::TriangleTest::Watertight,
+                    "moller-trumbore" => rtdiff::geometry::TriangleTest::MollerTrumbore,
+                    v => return Err(bad(format!("--triangle-test {v}: expected watertight or moller-trumbore"))),
                 }
             }
             "--only" => {
@@ -414,11 +435,12 @@ fn run_mesh(o: &Options, clock: &Clock, Dev(device): Dev, mesh_path: &str) -> rt
         mesh.positions.iter().fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(l, h), p| (l.min(*p), h.max(*p)));
     let centre = 0.5 * (lo + hi);
     let radius = 0.5 * (hi - lo).length();
+    let cfg = AccelConfig { triangle_test: o.triangle_test, ..AccelConfig::default() };
     let build_rtdiff = || -> rtdiff::Result<Box<dyn Tracer>> {
         match o.rtdiff_isa {
-            None => build_tracer(prims.clone(), &AccelConfig::default()),
+            None => build_tracer(prims.clone(), &cfg),
             Some(isa) => {
-                let mut t = rtdiff::bvh::BvhTracer::new(&prims, &AccelConfig::default());
+                let mut t = rtdiff::bvh::BvhTracer::new(&prims, &cfg);
                 t.force_isa(isa);
                 Ok(Box::new(t) as Box<dyn Tracer>)
             }
@@ -478,13 +500,26 @@ fn run_mesh(o: &Options, clock: &Clock, Dev(device): Dev, mesh_path: &str) -> rt
     let shadow = shadow_rays(&theirs[1], &camera, o.size, &lights, 1e-4 * radius);
     for (set, rays, any) in [("camera", &camera, false), ("incoherent", &incoherent, false), ("shadow", &shadow, true)]
     {
+        // With `--split`, the set again as two cells, by Embree default's
+        // answer: the rays that hit (or are occluded) and those that miss.
+        let mut cells: Vec<(String, Vec<UserRay>)> = vec![(set.to_string(), rays.clone())];
+        if o.split || o.only.is_some() {
+            let (hit, miss): (Vec<UserRay>, Vec<UserRay>) =
+                rays.iter().partition(|r| if any { theirs[0].occluded(r) } else { theirs[0].intersect(r).is_some() });
+            cells.push((format!("{set}-hits"), hit));
+            cells.push((format!("{set}-misses"), miss));
+        }
         if let Some((only, who)) = &o.only {
-            if only == set {
-                let (h, _) = match who {
-                    0 => trace_rtdiff(ours.as_ref(), rays, any),
-                    w => trace_embree(&theirs[w - 1], rays, any),
-                };
-                println!("{name} {set}: {} rays, {h} hit", rays.len());
+            for (set, rays) in cells.iter().filter(|(c, _)| c == only) {
+                let mut h = 0;
+                for _ in 0..o.runs {
+                    h = match who {
+                        0 => trace_rtdiff(ours.as_ref(), rays, any),
+                        w => trace_embree(&theirs[w - 1], rays, any),
+                    }
+                    .0;
+                }
+                println!("{name} {set}: {} rays traced {} times, {h} hit", rays.len(), o.runs);
             }
             continue;
         }
@@ -497,40 +532,42 @@ fn run_mesh(o: &Options, clock: &Clock, Dev(device): Dev, mesh_path: &str) -> rt
                 a != b
             })
             .count();
-        let mut times = vec![Vec::new(); 3];
-        let mut ratio = vec![Vec::new(); 2];
-        let mut hits = [0; 3];
-        for run in 0..o.runs {
-            let mut t = [0.0; 3];
-            for k in 0..3 {
-                let who = (k + run) % 3;
-                let s = clock.now();
-                let (h, sum) = match who {
-                    0 => trace_rtdiff(ours.as_ref(), rays, any),
-                    w => trace_embree(&theirs[w - 1], rays, any),
-                };
-                t[who] = clock.now() - s;
-                std::hint::black_box(sum);
-                hits[who] = h;
+        for (set, rays) in &cells {
+            let mut times = vec![Vec::new(); 3];
+            let mut ratio = vec![Vec::new(); 2];
+            let mut hits = [0; 3];
+            for run in 0..o.runs {
+                let mut t = [0.0; 3];
+                for k in 0..3 {
+                    let who = (k + run) % 3;
+                    let s = clock.now();
+                    let (h, sum) = match who {
+                        0 => trace_rtdiff(ours.as_ref(), rays, any),
+                        w => trace_embree(&theirs[w - 1], rays, any),
+                    };
+                    t[who] = clock.now() - s;
+                    std::hint::black_box(sum);
+                    hits[who] = h;
+                }
+                for k in 0..3 {
+                    times[k].push(t[k] * 1e9 / rays.len().max(1) as f64);
+                }
+                ratio[0].push(t[1] / t[0]);
+                ratio[1].push(t[2] / t[0]);
             }
-            for k in 0..3 {
-                times[k].push(t[k] * 1e9 / rays.len().max(1) as f64);
+            println!(
+                "| {name} | {set} | {} | {:.1}% | {} | {} | {} | {} | {} | {disagree} |",
+                rays.len(),
+                100.0 * hits[0] as f64 / rays.len().max(1) as f64,
+                cell(&times[0], 1),
+                cell(&times[1], 1),
+                cell(&times[2], 1),
+                cell(&ratio[0], 3),
+                cell(&ratio[1], 3),
+            );
+            if hits[0] != hits[2] || hits[1] != hits[2] {
+                println!("  (hits: rtdiff {}, embree-default {}, embree-robust {})", hits[0], hits[1], hits[2]);
             }
-            ratio[0].push(t[1] / t[0]);
-            ratio[1].push(t[2] / t[0]);
-        }
-        println!(
-            "| {name} | {set} | {} | {:.1}% | {} | {} | {} | {} | {} | {disagree} |",
-            rays.len(),
-            100.0 * hits[0] as f64 / rays.len().max(1) as f64,
-            cell(&times[0], 1),
-            cell(&times[1], 1),
-            cell(&times[2], 1),
-            cell(&ratio[0], 3),
-            cell(&ratio[1], 3),
-        );
-        if hits[0] != hits[2] || hits[1] != hits[2] {
-            println!("  (hits: rtdiff {}, embree-default {}, embree-robust {})", hits[0], hits[1], hits[2]);
         }
     }
     Ok(())
