@@ -2,7 +2,8 @@
 //! visits and packet tests per ray, on the `rtdiff bench` primary, incoherent
 //! and shadow rays (closest hit for the first two, any hit for shadow rays;
 //! the benchmark's shadow rays go to four lights, a quarter of the image
-//! each), and on the shadow rays of the whole image towards each of those
+//! each), on the closest-hit sets' rays that hit and rays that miss apart,
+//! and on the shadow rays of the whole image towards each of those
 //! lights, so that a change of the any-hit order is not tuned to one light. Unlike timings, these counts do not depend on the
 //! machine's load, so they compare tree layouts and build parameters exactly.
 //!
@@ -48,7 +49,19 @@ fn main() -> rtdiff::Result<()> {
         .into_iter()
         .map(|light| (format!("shadow{light}"), shadow_rays(&prims, &sets.primary, &hits, light, SpawnOffset::Robust)))
         .collect();
+    // The closest-hit sets again as the rays that hit and the rays that miss
+    // (which of them a tree change helps, as `outside_loop --split` times them).
+    let split: Vec<(String, Vec<rtdiff::geometry::Ray>)> = sets
+        .list()
+        .into_iter()
+        .filter(|(_, _, any)| !any)
+        .flat_map(|(name, rays, _)| {
+            let (hit, miss): (Vec<_>, Vec<_>) = rays.iter().partition(|r| reference.intersect(r).is_some());
+            [(format!("{name}-hits"), hit), (format!("{name}-misses"), miss)]
+        })
+        .collect();
     let mut list: Vec<(&str, &[rtdiff::geometry::Ray], bool)> = sets.list().to_vec();
+    list.extend(split.iter().map(|(n, r)| (n.as_str(), r.as_slice(), false)));
     list.extend(per_light.iter().map(|(n, r)| (n.as_str(), r.as_slice(), true)));
     for (name, rays, any) in list {
         let mut c = TraversalCounts::default();
