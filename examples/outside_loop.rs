@@ -44,6 +44,7 @@
 //! median ns per ray (or ms per build) with quartiles, and the median of
 //! the per-run ratios Embree time / rtdiff time with their quartiles.
 
+use std::borrow::Cow;
 use std::ffi::CString;
 use std::path::Path;
 use std::sync::Arc;
@@ -502,12 +503,12 @@ fn run_mesh(o: &Options, clock: &Clock, Dev(device): Dev, mesh_path: &str) -> rt
     {
         // With `--split`, the set again as two cells, by Embree default's
         // answer: the rays that hit (or are occluded) and those that miss.
-        let mut cells: Vec<(String, Vec<UserRay>)> = vec![(set.to_string(), rays.clone())];
+        let mut cells: Vec<(String, Cow<[UserRay]>)> = vec![(set.to_string(), Cow::Borrowed(rays))];
         if o.split || o.only.is_some() {
             let (hit, miss): (Vec<UserRay>, Vec<UserRay>) =
                 rays.iter().partition(|r| if any { theirs[0].occluded(r) } else { theirs[0].intersect(r).is_some() });
-            cells.push((format!("{set}-hits"), hit));
-            cells.push((format!("{set}-misses"), miss));
+            cells.push((format!("{set}-hits"), Cow::Owned(hit)));
+            cells.push((format!("{set}-misses"), Cow::Owned(miss)));
         }
         if let Some((only, who)) = &o.only {
             for (set, rays) in cells.iter().filter(|(c, _)| c == only) {
@@ -523,16 +524,16 @@ fn run_mesh(o: &Options, clock: &Clock, Dev(device): Dev, mesh_path: &str) -> rt
             }
             continue;
         }
-        // Hit/miss agreement of every ray, before timing.
-        let disagree = rays
-            .iter()
-            .filter(|r| {
-                let a = if any { ours.occluded(&to_ray(r)) } else { ours.intersect(&to_ray(r)).is_some() };
-                let b = if any { theirs[1].occluded(r) } else { theirs[1].intersect(r).is_some() };
-                a != b
-            })
-            .count();
         for (set, rays) in &cells {
+            // Hit/miss agreement of every ray, before timing.
+            let disagree = rays
+                .iter()
+                .filter(|r| {
+                    let a = if any { ours.occluded(&to_ray(r)) } else { ours.intersect(&to_ray(r)).is_some() };
+                    let b = if any { theirs[1].occluded(r) } else { theirs[1].intersect(r).is_some() };
+                    a != b
+                })
+                .count();
             let mut times = vec![Vec::new(); 3];
             let mut ratio = vec![Vec::new(); 2];
             let mut hits = [0; 3];
