@@ -184,6 +184,11 @@ fn parse_args() -> rtdiff::Result<Options> {
                     .iter()
                     .position(|w| *w == who)
                     .ok_or_else(|| bad(format!("--only {v}: WHO is rtdiff, embree-default or embree-robust")))?;
+                let cells = ["camera", "incoherent", "shadow"]
+                    .map(|b| [b.to_string(), format!("{b}-hits"), format!("{b}-misses")]);
+                if !cells.iter().flatten().any(|c| c == set) {
+                    return Err(bad(format!("--only {v}: SET is one of {}", cells.concat().join(", "))));
+                }
                 o.only = Some((set.to_string(), who));
             }
             s if s.starts_with("--") => return Err(bad(format!("unknown option {s}"))),
