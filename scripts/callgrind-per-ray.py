@@ -37,6 +37,8 @@ def parse(lines):
     after_calls = False
     for raw in lines:
         line = raw.rstrip("\n")
+        if line.startswith("positions:") and "instr" not in line.split()[1:]:
+            raise ValueError("no instruction addresses (profile it with --dump-instr=yes)")
         m = re.match(r"(c?ob)=\((\d+)\)(?: (.*))?$", line)
         if m:
             if m.group(3):
@@ -131,6 +133,11 @@ fn=(1)
     assert lib == {0x100: 5, 0x104: 5, 0x106: 3, 0x108: 7, 0x10A: 2}, lib
     main = {a: v for (o, a), v in c.items() if o == "/bin/main"}
     assert main == {0x50: 1}, main
+    try:
+        parse(["positions: line", "events: Ir", "fn=(1) f", "12 3"])
+        raise AssertionError("a profile without instruction addresses was read")
+    except ValueError:
+        pass
     run = hottest_run({0x100: 5, 0x104: 5, 0x2000: 30, 0x2008: 1}, 0x400)
     assert run == [0x2000, 0x2008], run
     print("callgrind-per-ray: self-test passed")
@@ -159,6 +166,8 @@ def main():
             counts = parse(f)
     except OSError as e:
         sys.exit(f"callgrind-per-ray: {args.profile}: {e.strerror}")
+    except ValueError as e:
+        sys.exit(f"callgrind-per-ray: {args.profile}: {e}")
     objs = sorted({o for o, _ in counts if o and args.object in o})
     if len(objs) != 1:
         sys.exit(f"callgrind-per-ray: {args.profile}: --object {args.object!r} matches {objs or 'no object'}")
