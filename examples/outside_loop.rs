@@ -303,6 +303,11 @@ impl EmbreeScene {
         unsafe { ffi::rtcOccluded1(self.scene, &mut ray, std::ptr::null_mut()) };
         ray.tfar == f32::NEG_INFINITY
     }
+
+    /// Whether `r` hits (closest hit) or is occluded (`any`): Embree's answer for one ray.
+    fn answers_hit(&self, r: &UserRay, any: bool) -> bool {
+        if any { self.occluded(r) } else { self.intersect(r).is_some() }
+    }
 }
 
 /// The ray as Embree's `RTCRay`, every geometry accepted (mask all ones).
@@ -510,8 +515,7 @@ fn run_mesh(o: &Options, clock: &Clock, Dev(device): Dev, mesh_path: &str) -> rt
         // answer: the rays that hit (or are occluded) and those that miss.
         let mut cells: Vec<(String, Cow<[UserRay]>)> = vec![(set.to_string(), Cow::Borrowed(rays))];
         if o.split || o.only.is_some() {
-            let (hit, miss): (Vec<UserRay>, Vec<UserRay>) =
-                rays.iter().partition(|r| if any { theirs[0].occluded(r) } else { theirs[0].intersect(r).is_some() });
+            let (hit, miss): (Vec<UserRay>, Vec<UserRay>) = rays.iter().partition(|r| theirs[0].answers_hit(r, any));
             cells.push((format!("{set}-hits"), Cow::Owned(hit)));
             cells.push((format!("{set}-misses"), Cow::Owned(miss)));
         }
@@ -535,7 +539,7 @@ fn run_mesh(o: &Options, clock: &Clock, Dev(device): Dev, mesh_path: &str) -> rt
                 .iter()
                 .filter(|r| {
                     let a = if any { ours.occluded(&to_ray(r)) } else { ours.intersect(&to_ray(r)).is_some() };
-                    let b = if any { theirs[1].occluded(r) } else { theirs[1].intersect(r).is_some() };
+                    let b = theirs[1].answers_hit(r, any);
                     a != b
                 })
                 .count();
