@@ -15,7 +15,7 @@ use crate::geometry::{Aabb, Prim, Primitives};
 use super::{LeafPrims, Node};
 
 /// Nodes with at least this many primitives (and at least the share of the
-/// tree's that [`FORKS_PER_TREE`] sets) build their two subtrees in parallel
+/// tree's that [`FORKS_PER_THREAD`] sets) build their two subtrees in parallel
 /// when the rayon pool has more than one thread. Small enough that
 /// a mesh of a thousand triangles forks at its root: suzanne (968 triangles)
 /// builds in 0.17-0.19 ms on two threads instead of 0.21 ms with 4096
@@ -23,14 +23,18 @@ use super::{LeafPrims, Node};
 /// two-thread build is no slower.
 const PARALLEL_THRESHOLD: usize = 512;
 
-/// Nodes fork only if they hold at least this fraction (one in
-/// `FORKS_PER_TREE`) of the tree's primitives: about `2 * FORKS_PER_TREE`
-/// forks per tree, plenty to share two or more threads' work, and each fork
-/// leaves a gap in the [`GappedTree`] whose edges touch pages of their own
-/// (about two per array). With [`PARALLEL_THRESHOLD`] alone dragon_full
-/// forked some 3,400 times, and its two-thread builds took 6,000 page faults
-/// more than with the pieces before (`perf stat -e page-faults`, 8 builds).
-const FORKS_PER_TREE: usize = 128;
+/// Nodes fork only if they hold at least one in `FORKS_PER_THREAD` times
+/// the pool's threads of the tree's primitives: about twice that many forks
+/// per tree, several for each thread to take, and no more, because every
+/// fork leaves a gap in the [`GappedTree`] (the slots its left subtree
+/// reserved and did not use, about three quarters of them) and a gap spans
+/// untouched pages only when it is large. The slot arrays of a large tree
+/// sit on 2 MiB pages ([`super::huge`]), each zeroed whole by the kernel at
+/// its first write: with one fork in 128 of dragon_full's primitives nearly
+/// every page of its 56 MB of node slots and 97 MB of value slots was
+/// written, and page clearing took 10% of its two-thread build's cycles
+/// (`perf record`), 3% on one thread.
+const FORKS_PER_THREAD: usize = 4;
 
 /// Passes over at least this many references (the root's boxes, the leaf
 /// order) run in parallel chunks of this size.
@@ -454,11 +458,8 @@ pub fn build_tree(prims: &Primitives, splitter: &dyn Splitter) -> BuiltTree {
 /// current pool (0: none does, on a one-thread pool, where a fork would only
 /// leave gaps, or in a tree too small to fork).
 fn fork_min(n: usize) -> usize {
-    if rayon::current_num_threads() > 1 && n >= PARALLEL_THRESHOLD {
-        PARALLEL_THRESHOLD.max(n / FORKS_PER_TREE)
-    } else {
-        0
-    }
+    let threads = rayon::current_num_threads();
+    if threads > 1 && n >= PARALLEL_THRESHOLD { PARALLEL_THRESHOLD.max(n / (FORKS_PER_THREAD * threads)) } else { 0 }
 }
 
 /// Run `splitter` over `prims` into a [`GappedTree`] with `summary`'s value
@@ -494,7 +495,7 @@ fn build_slots<S: Summary>(
     let n = refs.len();
     let slots = (2 * n).saturating_sub(1);
     let mut nodes: Vec<MaybeUninit<Node>> = super::scratch::nodes(slots);
-    let mut values: Vec<MaybeUninit<S::Value>> = Vec::with_capacity(slots);
+    let mut values: Vec<MaybeUninit<S::Value>> = super::huge::vec_with_capacity(slots);
     // SAFETY: uninitialised `MaybeUninit`s are valid values.
     unsafe {
         nodes.set_len(slots);
