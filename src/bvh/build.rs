@@ -4,6 +4,7 @@
 //! fork at large nodes. Split strategies only decide where to cut.
 
 use std::mem::MaybeUninit;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 use glam::{Vec3A, Vec4};
@@ -25,20 +26,24 @@ const PARALLEL_THRESHOLD: usize = 512;
 
 /// Nodes fork only if they hold at least one in `FORKS_PER_THREAD` times
 /// the pool's threads of the tree's primitives: about twice that many forks
-/// per tree, several for each thread to take, and no more, because every
-/// fork leaves a gap in the [`GappedTree`] (the slots its left subtree
-/// reserved and did not use, about three quarters of them) and a gap spans
-/// untouched pages only when it is large. The slot arrays of a large tree
-/// sit on 2 MiB pages ([`super::huge`]), each zeroed whole by the kernel at
-/// its first write: with one fork in 128 of dragon_full's primitives nearly
-/// every page of its 56 MB of node slots and 97 MB of value slots was
-/// written, and page clearing took 10% of its two-thread build's cycles
-/// (`perf record`), 3% on one thread.
-const FORKS_PER_THREAD: usize = 4;
+/// per tree, plenty for each thread to take work. A fork whose right subtree
+/// another thread takes leaves a gap in the [`GappedTree`], whose edge pages
+/// are written whole: when every fork left a gap, dragon_full forked some
+/// 3,400 times with [`PARALLEL_THRESHOLD`] alone and took 6,000 page faults
+/// more per 8 two-thread builds than with forks at one node in 128 of its
+/// primitives. Gaps at the taken forks only, one in
+/// 8, 32 and 128 measured alike (`RAYON_NUM_THREADS=2 call_path
+/// dragon_full.obj build 15`, three alternated runs: 63.7-66.7, 63.1-65.9,
+/// 63.5-69.0 ms).
+const FORKS_PER_THREAD: usize = 16;
 
 /// Passes over at least this many references (the root's boxes, the leaf
 /// order) run in parallel chunks of this size.
 const PARALLEL_PASS: usize = 1 << 14;
+
+/// Blocks larger than this come from the system (`mmap`) at every
+/// allocation with glibc, whose adaptive mmap threshold stops at 32 MiB.
+const FRESH_BYTES: usize = 32 << 20;
 
 /// A box in SIMD-friendly form for the builders' inner loops.
 #[derive(Clone, Copy, Debug)]
@@ -317,12 +322,20 @@ impl Summary for () {
 
 /// A tree built in place: every subtree over `m` primitives owns the `2m - 1`
 /// slots from its node on (room for its largest possible tree, one
-/// primitive per leaf), and at a fork its right subtree starts right after
-/// its left one's room, so that two threads write their subtrees straight
-/// into one array. Below the forks the nodes follow one another depth-first
-/// as in a sequential build; after a fork's left subtree the slots it left
-/// unused stay unwritten (gaps). Without forks (one thread, or a tree too
-/// small to fork) there are no gaps and the layout is the sequential one.
+/// primitive per leaf), and at a fork whose right subtree another thread
+/// took before the left one was finished, the right subtree starts right
+/// after the left one's room, so that two threads write their subtrees
+/// straight into one array; otherwise (the right subtree run after the left
+/// one) right after the left one's last node. Below the forks the nodes
+/// follow one another depth-first as in a sequential build; after the left
+/// subtree of a fork of the first kind the slots it left unused stay
+/// unwritten (gaps). Without forks (one thread, or a tree too small to
+/// fork) there are no gaps and the layout is the sequential one.
+///
+/// A gap's first and last huge pages are written (and cleared by the
+/// kernel) whole: with a gap at every fork, dragon_full's two-thread build
+/// cleared 66 huge pages against one thread's 36 (`thp_fault_alloc` in
+/// `/proc/vmstat`), with gaps at the taken forks only 48.
 ///
 /// Each node's [`Summary`] value sits in `values` at the node's index.
 ///
@@ -451,7 +464,7 @@ impl<V> GappedTree<V> {
 
 /// Run `splitter` over `prims` and flatten the result.
 pub fn build_tree(prims: &Primitives, splitter: &dyn Splitter) -> BuiltTree {
-    build_slots(prims, splitter, &(), fork_min(prims.len())).into_built()
+    build_slots(prims, splitter, &(), fork_min(prims.len()), true).into_built()
 }
 
 /// The smallest node that forks in a build over `n` primitives on the
@@ -476,26 +489,35 @@ fn fork_min(n: usize) -> usize {
 pub fn build_gapped<S: Summary>(prims: &Primitives, splitter: &dyn Splitter, summary: &S) -> GappedTree<S::Value> {
     let fork_min = fork_min(prims.len());
     if fork_min == 0 {
-        let tree = build_slots(prims, splitter, &(), 0).into_built();
+        let tree = build_slots(prims, splitter, &(), 0, true).into_built();
         return GappedTree::from_nodes(tree.nodes, tree.order, summary);
     }
-    build_slots(prims, splitter, summary, fork_min)
+    build_slots(prims, splitter, summary, fork_min, true)
 }
 
 /// [`build_gapped`] computing the values in the slots, forking at nodes of
-/// at least `fork_min` primitives (0: nowhere).
+/// at least `fork_min` primitives (0: nowhere), a fork's right subtree
+/// packed after its left one when that is finished (`pack`, see
+/// [`build_node`]).
 fn build_slots<S: Summary>(
     prims: &Primitives,
     splitter: &dyn Splitter,
     summary: &S,
     fork_min: usize,
+    pack: bool,
 ) -> GappedTree<S::Value> {
     let input = BuildInput::new(prims, splitter.needs_vertex_means());
     let (mut refs, bounds, centroids) = prim_refs_and_bounds(prims);
     let n = refs.len();
     let slots = (2 * n).saturating_sub(1);
     let mut nodes: Vec<MaybeUninit<Node>> = super::scratch::nodes(slots);
-    let mut values: Vec<MaybeUninit<S::Value>> = super::huge::vec_with_capacity(slots);
+    // Value slots beyond glibc's largest mmap threshold (32 MiB) come fresh
+    // from the system at every build and so are asked for on huge pages;
+    // smaller ones the allocator may hand back to the next build with their
+    // pages, which the advice would drop (`super::huge`).
+    let values_bytes = slots * std::mem::size_of::<S::Value>();
+    let mut values: Vec<MaybeUninit<S::Value>> =
+        if values_bytes > FRESH_BYTES { super::huge::vec_with_capacity(slots) } else { Vec::with_capacity(slots) };
     // SAFETY: uninitialised `MaybeUninit`s are valid values.
     unsafe {
         nodes.set_len(slots);
@@ -504,7 +526,7 @@ fn build_slots<S: Summary>(
     let (mut count, mut end) = (0, 0);
     if n > 0 {
         let out = Slots { nodes: nodes.as_mut_ptr(), values: values.as_mut_ptr(), len: slots };
-        let c = Ctx { splitter, summary, input: &input, out, fork_min };
+        let c = Ctx { splitter, summary, input: &input, out, fork_min, pack };
         let root = build_node(&c, &mut refs, bounds.aabb(), Some(centroids), 0, 0, 0);
         (count, end) = (root.count, root.end);
     }
@@ -575,6 +597,9 @@ struct Ctx<'a, S: Summary> {
     input: &'a BuildInput,
     out: Slots<S::Value>,
     fork_min: usize,
+    /// Place a fork's right subtree straight after its left one when that
+    /// is finished (false: always after the left one's room, tests only).
+    pack: bool,
 }
 
 /// What building a subtree reports: one past its last slot written and its
@@ -592,8 +617,11 @@ struct Built {
 /// over `n` whose sides hold `m` and `n - m` takes one, its left subtree at
 /// most `2m - 1` from `at + 1`, its right one at most `2(n - m) - 1` from
 /// `at + 2m` at a fork or from the left one's end otherwise, at most
-/// `1 + (2m - 1) + 2(n - m) - 1` in all). At a fork the two subtrees are
-/// built in parallel, each in its own disjoint slots.
+/// `1 + (2m - 1) + 2(n - m) - 1` in all; the right one may also start at
+/// the left one's end, which lies no later). At a fork the two subtrees are
+/// built in parallel, each in its own disjoint slots: the right one starts
+/// at the left one's end when the left one is finished by the time the
+/// right one starts (`Ctx::pack`), after its room otherwise.
 fn build_node<S: Summary>(
     c: &Ctx<S>,
     idx: &mut [PrimRef],
@@ -626,11 +654,22 @@ fn build_node<S: Summary>(
     let (lb, rb) = child_bounds.unwrap_or_else(|| (bounds_of(l), bounds_of(r)));
     let right_first = first + mid as u32;
     let (left, right, right_at) = if c.fork_min > 0 && n >= c.fork_min {
-        // The right subtree starts after the left one's room.
-        let right_at = at + 2 * mid;
-        let (left, right) = rayon::join(
-            || build_node(c, l, lb, None, first, depth + 1, at + 1),
-            || build_node(c, r, rb, None, right_first, depth + 1, right_at),
+        // The right subtree starts straight after the left one when that is
+        // finished (the right one was not taken by another thread, which is
+        // the common case below the top forks, and rayon then runs it after
+        // the left one): no gap. Otherwise after the left one's room.
+        let left_end = AtomicUsize::new(usize::MAX);
+        let (left, (right, right_at)) = rayon::join(
+            || {
+                let left = build_node(c, l, lb, None, first, depth + 1, at + 1);
+                left_end.store(left.end, Ordering::Release);
+                left
+            },
+            || {
+                let end = left_end.load(Ordering::Acquire);
+                let right_at = if end == usize::MAX || !c.pack { at + 2 * mid } else { end };
+                (build_node(c, r, rb, None, right_first, depth + 1, right_at), right_at)
+            },
         );
         (left, right, right_at)
     } else {
@@ -716,15 +755,18 @@ mod tests {
             };
             let (a, b) = (build(1), build(2));
             assert!(a.nodes.len() > 10_000);
-            // The two-thread build forked, and (but for one primitive per
-            // leaf, which fills every subtree's room) left gaps.
+            // The two-thread build forked, and with every right subtree
+            // after its left one's room (not packed) left gaps (but for one
+            // primitive per leaf, which fills every subtree's room): laid
+            // out, those slots are the one-thread tree too.
             let gapped = rayon::ThreadPoolBuilder::new()
                 .num_threads(2)
                 .build()
                 .unwrap()
-                .install(|| build_slots(&prims, splitter, &(), fork_min(prims.len())));
+                .install(|| build_slots(&prims, splitter, &(), fork_min(prims.len()), false));
             assert_eq!(gapped.count, a.nodes.len());
             assert!(gapped.end > gapped.count || std::ptr::addr_eq(splitter, &median), "no gaps");
+            assert!(gapped.into_built().nodes == a.nodes, "the gapped slots laid out another tree");
             check_links(&a);
             assert!(a.nodes == b.nodes, "1 and 2 threads laid out different nodes");
             assert_eq!(a.order, b.order);
