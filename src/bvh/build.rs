@@ -510,7 +510,15 @@ fn build_slots<S: Summary>(
     let (mut refs, bounds, centroids) = prim_refs_and_bounds(prims);
     let n = refs.len();
     let slots = (2 * n).saturating_sub(1);
-    let mut nodes: Vec<MaybeUninit<Node>> = super::scratch::nodes(slots);
+    // A forking build's slots below glibc's largest mmap threshold come from
+    // the allocator's heap, whose pages a later build reuses (no huge-page
+    // advice, which would drop them): the gaps at the forks other threads
+    // take would touch huge pages of their own.
+    let mut nodes: Vec<MaybeUninit<Node>> = if fork_min > 0 && slots * std::mem::size_of::<Node>() <= FRESH_BYTES {
+        Vec::with_capacity(slots)
+    } else {
+        super::scratch::nodes(slots)
+    };
     // Value slots beyond glibc's largest mmap threshold (32 MiB) come fresh
     // from the system at every build and so are asked for on huge pages;
     // smaller ones the allocator may hand back to the next build with their
