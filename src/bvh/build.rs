@@ -334,7 +334,7 @@ impl Summary for () {
 ///
 /// A gap's first and last huge pages are written (and cleared by the
 /// kernel) whole: with a gap at every fork, dragon_full's two-thread build
-/// cleared 66 huge pages against one thread's 36 (`thp_fault_alloc` in
+/// cleared 57 huge pages against one thread's 36 (`thp_fault_alloc` in
 /// `/proc/vmstat`), with gaps at the taken forks only 48.
 ///
 /// Each node's [`Summary`] value sits in `values` at the node's index.
@@ -510,15 +510,18 @@ fn build_slots<S: Summary>(
     let (mut refs, bounds, centroids) = prim_refs_and_bounds(prims);
     let n = refs.len();
     let slots = (2 * n).saturating_sub(1);
-    // A forking build's slots below glibc's largest mmap threshold come from
-    // the allocator's heap, whose pages a later build reuses (no huge-page
-    // advice, which would drop them): the gaps at the forks other threads
-    // take would touch huge pages of their own.
-    let mut nodes: Vec<MaybeUninit<Node>> = if fork_min > 0 && slots * std::mem::size_of::<Node>() <= FRESH_BYTES {
-        Vec::with_capacity(slots)
-    } else {
-        super::scratch::nodes(slots)
-    };
+    // A forking build's slots too large to keep between builds
+    // (`scratch::KEEP_BYTES`) and below glibc's largest mmap threshold come
+    // from the allocator's heap, whose pages a later build reuses (no
+    // huge-page advice, which would drop them): the gaps at the forks other
+    // threads take would touch huge pages of their own.
+    let node_bytes = slots * std::mem::size_of::<Node>();
+    let mut nodes: Vec<MaybeUninit<Node>> =
+        if fork_min > 0 && node_bytes > super::scratch::KEEP_BYTES && node_bytes <= FRESH_BYTES {
+            Vec::with_capacity(slots)
+        } else {
+            super::scratch::nodes(slots)
+        };
     // Value slots beyond glibc's largest mmap threshold (32 MiB) come fresh
     // from the system at every build and so are asked for on huge pages;
     // smaller ones the allocator may hand back to the next build with their
