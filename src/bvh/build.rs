@@ -511,24 +511,15 @@ fn build_slots<S: Summary>(
     let n = refs.len();
     let slots = (2 * n).saturating_sub(1);
     // A forking build's slots too large to keep between builds
-    // (`scratch::KEEP_BYTES`) and below glibc's largest mmap threshold come
-    // from the allocator's heap, whose pages a later build reuses (no
-    // huge-page advice, which would drop them): the gaps at the forks other
-    // threads take would touch huge pages of their own.
-    let node_bytes = slots * std::mem::size_of::<Node>();
+    // (`scratch::KEEP_BYTES`) are asked for by [`gapped_slots`]; the value
+    // slots of any build too.
     let mut nodes: Vec<MaybeUninit<Node>> =
-        if fork_min > 0 && node_bytes > super::scratch::KEEP_BYTES && node_bytes <= FRESH_BYTES {
-            Vec::with_capacity(slots)
+        if fork_min > 0 && slots * std::mem::size_of::<Node>() > super::scratch::KEEP_BYTES {
+            gapped_slots(slots)
         } else {
             super::scratch::nodes(slots)
         };
-    // Value slots beyond glibc's largest mmap threshold (32 MiB) come fresh
-    // from the system at every build and so are asked for on huge pages;
-    // smaller ones the allocator may hand back to the next build with their
-    // pages, which the advice would drop (`super::huge`).
-    let values_bytes = slots * std::mem::size_of::<S::Value>();
-    let mut values: Vec<MaybeUninit<S::Value>> =
-        if values_bytes > FRESH_BYTES { super::huge::vec_with_capacity(slots) } else { Vec::with_capacity(slots) };
+    let mut values: Vec<MaybeUninit<S::Value>> = gapped_slots(slots);
     // SAFETY: uninitialised `MaybeUninit`s are valid values.
     unsafe {
         nodes.set_len(slots);
@@ -549,6 +540,16 @@ fn build_slots<S: Summary>(
     }
     super::scratch::give_refs(refs);
     GappedTree { nodes, values, count, end, order }
+}
+
+/// Room for `n` slots of a [`GappedTree`]: beyond glibc's largest mmap
+/// threshold ([`FRESH_BYTES`]) the block comes fresh from the system at every
+/// build and is asked for on huge pages; a smaller one comes from the
+/// allocator's heap, whose pages a later build reuses (the huge-page advice
+/// would drop them, and the gaps at the forks other threads take would touch
+/// huge pages of their own).
+fn gapped_slots<T>(n: usize) -> Vec<MaybeUninit<T>> {
+    if n * std::mem::size_of::<T>() > FRESH_BYTES { super::huge::vec_with_capacity(n) } else { Vec::with_capacity(n) }
 }
 
 /// Run `splitter` over `prims`, flatten the result and gather the primitives in leaf order.
